@@ -1,0 +1,166 @@
+/*
+ * vkas.h - Vulkan acceleration-structure host commands and host ray queries.
+ *
+ * vkas implements VK_KHR_acceleration_structure's host commands on the CPU. A program creates a vkas device,
+ * obtains the Vulkan commands it needs with vkasGetDeviceProcAddr (they have exactly the Vulkan PFN_vk...
+ * signatures), builds acceleration structures with vkBuildAccelerationStructuresKHR and traces rays through them
+ * with the vkasRayQuery* functions, one per SPIR-V OpRayQuery*KHR instruction, with the same semantics.
+ *
+ * All memory is host memory: memory type 0 is HOST_VISIBLE | HOST_COHERENT | DEVICE_LOCAL, vkMapMemory returns
+ * the allocation's address and every VkDeviceOrHostAddress* is a host pointer. See docs/API.md.
+ */
+#ifndef VKAS_H_
+#define VKAS_H_
+
+#include <stddef.h>
+#include <stdint.h>
+#include <vulkan/vulkan_core.h>
+
+#include "vkas_compat.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#if defined(_WIN32)
+#define VKAS_API
+#else
+#define VKAS_API __attribute__((visibility("default")))
+#endif
+
+#define VKAS_VERSION_MAJOR 0
+#define VKAS_VERSION_MINOR 1
+#define VKAS_VERSION_PATCH 0
+
+/* ---------------------------------------------------------------------------------------------------------- */
+/* Bootstrap                                                                                                   */
+/* ---------------------------------------------------------------------------------------------------------- */
+
+typedef struct VkasDeviceCreateInfo {
+    VkBool32 disableValidation;                        /* VK_FALSE (default): every command checks its valid usage */
+    PFN_vkDebugUtilsMessengerCallbackEXT pfnMessenger; /* NULL: messages go to stderr */
+    void* pMessengerUserData;
+    uint32_t workerThreadCount; /* threads for vkas's own batch helpers; 0 = all cores */
+} VkasDeviceCreateInfo;
+
+VKAS_API VkResult vkasCreateDevice(const VkasDeviceCreateInfo* pCreateInfo /* may be NULL */, VkDevice* pDevice);
+VKAS_API void vkasDestroyDevice(VkDevice device);
+/* The implementation of the Vulkan command named pName, or NULL when vkas does not implement it. */
+VKAS_API PFN_vkVoidFunction vkasGetDeviceProcAddr(VkDevice device, const char* pName);
+
+/* What a Vulkan physical device would report. vkas has no VkPhysicalDevice; these take the device instead. */
+VKAS_API void vkasGetAccelerationStructureFeatures(VkDevice device,
+                                                   VkPhysicalDeviceAccelerationStructureFeaturesKHR* pFeatures);
+VKAS_API void vkasGetAccelerationStructureProperties(VkDevice device,
+                                                     VkPhysicalDeviceAccelerationStructurePropertiesKHR* pProperties);
+/* bufferFeatures holds VK_FORMAT_FEATURE_ACCELERATION_STRUCTURE_VERTEX_BUFFER_BIT_KHR for usable vertex formats. */
+VKAS_API void vkasGetFormatProperties(VkDevice device, VkFormat format, VkFormatProperties* pFormatProperties);
+
+/* ---------------------------------------------------------------------------------------------------------- */
+/* Host ray queries (SPV_KHR_ray_query)                                                                         */
+/* ---------------------------------------------------------------------------------------------------------- */
+
+/* Ray flags: the SPIR-V RayFlags values. */
+#define VKAS_RAY_FLAG_NONE 0x0u
+#define VKAS_RAY_FLAG_OPAQUE 0x1u
+#define VKAS_RAY_FLAG_NO_OPAQUE 0x2u
+#define VKAS_RAY_FLAG_TERMINATE_ON_FIRST_HIT 0x4u
+#define VKAS_RAY_FLAG_SKIP_CLOSEST_HIT_SHADER 0x8u
+#define VKAS_RAY_FLAG_CULL_BACK_FACING_TRIANGLES 0x10u
+#define VKAS_RAY_FLAG_CULL_FRONT_FACING_TRIANGLES 0x20u
+#define VKAS_RAY_FLAG_CULL_OPAQUE 0x40u
+#define VKAS_RAY_FLAG_CULL_NO_OPAQUE 0x80u
+#define VKAS_RAY_FLAG_SKIP_TRIANGLES 0x100u
+#define VKAS_RAY_FLAG_SKIP_AABBS 0x200u
+
+/* OpRayQueryGetIntersectionTypeKHR results (SPIR-V RayQueryCommittedIntersectionType / CandidateIntersectionType). */
+#define VKAS_COMMITTED_INTERSECTION_NONE 0u
+#define VKAS_COMMITTED_INTERSECTION_TRIANGLE 1u
+#define VKAS_COMMITTED_INTERSECTION_GENERATED 2u
+#define VKAS_CANDIDATE_INTERSECTION_TRIANGLE 0u
+#define VKAS_CANDIDATE_INTERSECTION_AABB 1u
+
+/* Size in bytes of a ray query's state: it holds the traversal stacks, so a query never allocates. */
+#define VKAS_RAY_QUERY_SIZE 12288
+
+typedef struct VkasRayQuery { /* 16-byte aligned */
+#if defined(__cplusplus)
+    alignas(16)
+#else
+    _Alignas(16)
+#endif
+        unsigned char opaque[VKAS_RAY_QUERY_SIZE];
+} VkasRayQuery;
+
+VKAS_API void vkasRayQueryInitialize(VkasRayQuery* q, VkAccelerationStructureKHR topLevel, uint32_t rayFlags,
+                                     uint32_t cullMask, const float origin[3], float tMin, const float direction[3],
+                                     float tMax);
+VKAS_API VkBool32 vkasRayQueryProceed(VkasRayQuery* q);
+VKAS_API void vkasRayQueryTerminate(VkasRayQuery* q);
+VKAS_API void vkasRayQueryGenerateIntersection(VkasRayQuery* q, float tHit);
+VKAS_API void vkasRayQueryConfirmIntersection(VkasRayQuery* q);
+VKAS_API uint32_t vkasRayQueryGetIntersectionType(const VkasRayQuery* q, VkBool32 committed);
+VKAS_API float vkasRayQueryGetRayTMin(const VkasRayQuery* q);
+VKAS_API uint32_t vkasRayQueryGetRayFlags(const VkasRayQuery* q);
+VKAS_API void vkasRayQueryGetWorldRayOrigin(const VkasRayQuery* q, float out[3]);
+VKAS_API void vkasRayQueryGetWorldRayDirection(const VkasRayQuery* q, float out[3]);
+VKAS_API float vkasRayQueryGetIntersectionT(const VkasRayQuery* q, VkBool32 committed);
+VKAS_API int32_t vkasRayQueryGetIntersectionInstanceCustomIndex(const VkasRayQuery* q, VkBool32 committed);
+VKAS_API int32_t vkasRayQueryGetIntersectionInstanceId(const VkasRayQuery* q, VkBool32 committed);
+VKAS_API uint32_t vkasRayQueryGetIntersectionInstanceShaderBindingTableRecordOffset(const VkasRayQuery* q,
+                                                                                    VkBool32 committed);
+VKAS_API int32_t vkasRayQueryGetIntersectionGeometryIndex(const VkasRayQuery* q, VkBool32 committed);
+VKAS_API int32_t vkasRayQueryGetIntersectionPrimitiveIndex(const VkasRayQuery* q, VkBool32 committed);
+VKAS_API void vkasRayQueryGetIntersectionBarycentrics(const VkasRayQuery* q, VkBool32 committed, float out[2]);
+VKAS_API VkBool32 vkasRayQueryGetIntersectionFrontFace(const VkasRayQuery* q, VkBool32 committed);
+VKAS_API VkBool32 vkasRayQueryGetIntersectionCandidateAABBOpaque(const VkasRayQuery* q);
+VKAS_API void vkasRayQueryGetIntersectionObjectRayOrigin(const VkasRayQuery* q, VkBool32 committed, float out[3]);
+VKAS_API void vkasRayQueryGetIntersectionObjectRayDirection(const VkasRayQuery* q, VkBool32 committed,
+                                                            float out[3]);
+VKAS_API void vkasRayQueryGetIntersectionObjectToWorld(const VkasRayQuery* q, VkBool32 committed, float out[3][4]);
+VKAS_API void vkasRayQueryGetIntersectionWorldToObject(const VkasRayQuery* q, VkBool32 committed, float out[3][4]);
+VKAS_API void vkasRayQueryGetIntersectionTriangleVertexPositions(const VkasRayQuery* q, VkBool32 committed,
+                                                                 float out[3][3]);
+
+/* ---------------------------------------------------------------------------------------------------------- */
+/* Batch tracing: many rays at once, spread over the device's worker threads                                  */
+/* ---------------------------------------------------------------------------------------------------------- */
+
+typedef struct VkasRay {
+    float origin[3];
+    float tMin;
+    float direction[3];
+    float tMax;
+} VkasRay;
+
+typedef struct VkasHit {
+    uint32_t type; /* VKAS_COMMITTED_INTERSECTION_*: NONE when the ray missed (the other fields are then 0/-1) */
+    float t;
+    int32_t instanceId;
+    int32_t instanceCustomIndex;
+    int32_t geometryIndex;
+    int32_t primitiveIndex;
+    float barycentrics[2];
+    uint32_t instanceShaderBindingTableRecordOffset;
+    VkBool32 frontFace;
+} VkasHit;
+
+typedef enum VkasTraceMode {
+    VKAS_TRACE_MODE_CLOSEST_HIT = 0, /* the committed hit after full traversal */
+    VKAS_TRACE_MODE_ANY_HIT = 1,     /* traversal ends at the first hit (adds TERMINATE_ON_FIRST_HIT): shadow rays */
+} VkasTraceMode;
+
+/*
+ * Traces rayCount rays as if each ran a ray query to completion, confirming every non-opaque triangle candidate
+ * (the behaviour of a pipeline whose any-hit shader is unused), and writes pHits[i] for pRays[i].
+ * Returns VK_SUCCESS, or VK_ERROR_VALIDATION_FAILED_EXT (nothing written) when validation finds bad parameters.
+ */
+VKAS_API VkResult vkasTraceRays(VkDevice device, VkAccelerationStructureKHR topLevel, VkasTraceMode mode,
+                                uint32_t rayFlags, uint32_t cullMask, uint32_t rayCount, const VkasRay* pRays,
+                                VkasHit* pHits);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* VKAS_H_ */

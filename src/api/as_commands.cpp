@@ -1,0 +1,493 @@
+// vkCreate/DestroyAccelerationStructureKHR, the address and size queries, and vkBuildAccelerationStructuresKHR:
+// valid-usage checks first (nothing is written when one fails), then the engine builds on plain memory.
+#include <cinttypes>
+#include <new>
+#include <unordered_set>
+
+#include "api/device.hpp"
+#include "api/entry_points.hpp"
+#include "api/limits.hpp"
+#include "api/validation.hpp"
+#include "engine/as_build.hpp"
+#include "engine/build_sizes.hpp"
+#include "engine/format.hpp"
+#include "engine/geometry_fetch.hpp"
+#include "engine/vertex_format.hpp"
+
+namespace vkas::entry {
+
+namespace {
+
+using ull = unsigned long long;
+
+format::StructureType structureType(VkAccelerationStructureTypeKHR t) {
+    return t == VK_ACCELERATION_STRUCTURE_TYPE_TOP_LEVEL_KHR ? format::StructureType::TopLevel
+                                                             : format::StructureType::BottomLevel;
+}
+
+const VkAccelerationStructureGeometryKHR* geometryAt(const VkAccelerationStructureBuildGeometryInfoKHR& info,
+                                                     uint32_t i) {
+    if (info.pGeometries) return &info.pGeometries[i];
+    return info.ppGeometries ? info.ppGeometries[i] : nullptr;
+}
+
+// Rules on VkAccelerationStructureBuildGeometryInfoKHR that do not depend on range infos or handles; shared by
+// the build and the size query. `where` names the info in messages, e.g. "pInfos[2]".
+void checkGeometryInfo(Validator& v, const VkAccelerationStructureBuildGeometryInfoKHR& info, const char* where) {
+    v.check(info.sType == VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_BUILD_GEOMETRY_INFO_KHR,
+            "VUID-VkAccelerationStructureBuildGeometryInfoKHR-sType-sType", "%s.sType is %d.", where, int(info.sType));
+    v.check(info.type == VK_ACCELERATION_STRUCTURE_TYPE_TOP_LEVEL_KHR ||
+                info.type == VK_ACCELERATION_STRUCTURE_TYPE_BOTTOM_LEVEL_KHR ||
+                info.type == VK_ACCELERATION_STRUCTURE_TYPE_GENERIC_KHR,
+            "VUID-VkAccelerationStructureBuildGeometryInfoKHR-type-parameter", "%s.type %d is not a valid value.",
+            where, int(info.type));
+    v.check(info.type != VK_ACCELERATION_STRUCTURE_TYPE_GENERIC_KHR,
+            "VUID-VkAccelerationStructureBuildGeometryInfoKHR-type-03654", "%s.type is GENERIC.", where);
+    v.check(!((info.flags & VK_BUILD_ACCELERATION_STRUCTURE_PREFER_FAST_TRACE_BIT_KHR) &&
+              (info.flags & VK_BUILD_ACCELERATION_STRUCTURE_PREFER_FAST_BUILD_BIT_KHR)),
+            "VUID-VkAccelerationStructureBuildGeometryInfoKHR-flags-03796",
+            "%s.flags has both PREFER_FAST_TRACE and PREFER_FAST_BUILD.", where);
+    if (info.geometryCount != 0) {
+        v.check((info.pGeometries == nullptr) != (info.ppGeometries == nullptr),
+                "VUID-VkAccelerationStructureBuildGeometryInfoKHR-pGeometries-03788",
+                "%s: exactly one of pGeometries and ppGeometries must be non-NULL (geometryCount %u).", where,
+                info.geometryCount);
+    }
+    if (info.pGeometries == nullptr && info.ppGeometries == nullptr) return;
+    if (info.type == VK_ACCELERATION_STRUCTURE_TYPE_TOP_LEVEL_KHR) {
+        v.check(info.geometryCount == 1, "VUID-VkAccelerationStructureBuildGeometryInfoKHR-type-03790",
+                "%s is a top-level build with geometryCount %u.", where, info.geometryCount);
+    } else if (info.type == VK_ACCELERATION_STRUCTURE_TYPE_BOTTOM_LEVEL_KHR) {
+        v.check(info.geometryCount <= limits::kMaxGeometryCount,
+                "VUID-VkAccelerationStructureBuildGeometryInfoKHR-type-03793",
+                "%s.geometryCount %u exceeds maxGeometryCount.", where, info.geometryCount);
+    }
+    VkGeometryTypeKHR firstType = VK_GEOMETRY_TYPE_MAX_ENUM_KHR;
+    for (uint32_t g = 0; g < info.geometryCount; ++g) {
+        const VkAccelerationStructureGeometryKHR* geom = geometryAt(info, g);
+        if (!v.check(geom != nullptr, "VUID-VkAccelerationStructureBuildGeometryInfoKHR-ppGeometries-parameter",
+                     "%s.ppGeometries[%u] is NULL.", where, g))
+            continue;
+        v.check(geom->sType == VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_GEOMETRY_KHR,
+                "VUID-VkAccelerationStructureGeometryKHR-sType-sType", "%s geometry %u: sType is %d.", where, g,
+                int(geom->sType));
+        v.check(geom->geometryType == VK_GEOMETRY_TYPE_TRIANGLES_KHR || geom->geometryType == VK_GEOMETRY_TYPE_INSTANCES_KHR,
+                "VUID-VkAccelerationStructureGeometryKHR-geometryType-parameter",
+                "%s geometry %u: geometryType %d is not supported by vkas yet.", where, g, int(geom->geometryType));
+        v.check((geom->flags & ~uint32_t(VK_GEOMETRY_OPAQUE_BIT_KHR | VK_GEOMETRY_NO_DUPLICATE_ANY_HIT_INVOCATION_BIT_KHR)) == 0,
+                "VUID-VkAccelerationStructureGeometryKHR-flags-parameter", "%s geometry %u: flags 0x%x has unknown bits.",
+                where, g, geom->flags);
+        if (info.type == VK_ACCELERATION_STRUCTURE_TYPE_TOP_LEVEL_KHR) {
+            v.check(geom->geometryType == VK_GEOMETRY_TYPE_INSTANCES_KHR,
+                    "VUID-VkAccelerationStructureBuildGeometryInfoKHR-type-03789",
+                    "%s is a top-level build but geometry %u has geometryType %d.", where, g, int(geom->geometryType));
+        } else if (info.type == VK_ACCELERATION_STRUCTURE_TYPE_BOTTOM_LEVEL_KHR) {
+            v.check(geom->geometryType != VK_GEOMETRY_TYPE_INSTANCES_KHR,
+                    "VUID-VkAccelerationStructureBuildGeometryInfoKHR-type-03791",
+                    "%s is a bottom-level build but geometry %u is INSTANCES.", where, g);
+            if (g == 0) firstType = geom->geometryType;
+            v.check(geom->geometryType == firstType, "VUID-VkAccelerationStructureBuildGeometryInfoKHR-type-03792",
+                    "%s: geometry %u has geometryType %d but geometry 0 has %d.", where, g, int(geom->geometryType),
+                    int(firstType));
+        }
+        if (geom->geometryType == VK_GEOMETRY_TYPE_TRIANGLES_KHR) {
+            const auto& t = geom->geometry.triangles;
+            v.check(t.sType == VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_GEOMETRY_TRIANGLES_DATA_KHR,
+                    "VUID-VkAccelerationStructureGeometryTrianglesDataKHR-sType-sType",
+                    "%s geometry %u: triangles.sType is %d.", where, g, int(t.sType));
+            const VertexFormatInfo* fmt = vertexFormatInfo(t.vertexFormat);
+            v.check(fmt != nullptr, "VUID-VkAccelerationStructureGeometryTrianglesDataKHR-vertexFormat-03797",
+                    "%s geometry %u: vertexFormat %d lacks VK_FORMAT_FEATURE_ACCELERATION_STRUCTURE_VERTEX_BUFFER_BIT_KHR.",
+                    where, g, int(t.vertexFormat));
+            if (fmt)
+                v.check(t.vertexStride % fmt->componentSize == 0,
+                        "VUID-VkAccelerationStructureGeometryTrianglesDataKHR-vertexStride-03735",
+                        "%s geometry %u: vertexStride %llu is not a multiple of the component size %u.", where, g,
+                        (ull)t.vertexStride, fmt->componentSize);
+            v.check(t.vertexStride <= UINT32_MAX, "VUID-VkAccelerationStructureGeometryTrianglesDataKHR-vertexStride-03819",
+                    "%s geometry %u: vertexStride %llu exceeds 2^32-1.", where, g, (ull)t.vertexStride);
+            v.check(t.indexType == VK_INDEX_TYPE_UINT16 || t.indexType == VK_INDEX_TYPE_UINT32 ||
+                        t.indexType == VK_INDEX_TYPE_NONE_KHR,
+                    "VUID-VkAccelerationStructureGeometryTrianglesDataKHR-indexType-03798",
+                    "%s geometry %u: indexType %d is not UINT16, UINT32 or NONE_KHR.", where, g, int(t.indexType));
+        }
+        if (geom->geometryType == VK_GEOMETRY_TYPE_INSTANCES_KHR) {
+            v.check(geom->geometry.instances.sType == VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_GEOMETRY_INSTANCES_DATA_KHR,
+                    "VUID-VkAccelerationStructureGeometryInstancesDataKHR-sType-sType",
+                    "%s geometry %u: instances.sType is %d.", where, g, int(geom->geometry.instances.sType));
+        }
+    }
+}
+
+// Byte ranges [begin, end) in host memory, for the overlap rules.
+struct Span {
+    uintptr_t begin = 0, end = 0;
+    bool overlaps(const Span& o) const { return begin < o.end && o.begin < end && begin != end && o.begin != o.end; }
+};
+
+Span blockSpan(const AccelerationStructure* as) {
+    auto b = reinterpret_cast<uintptr_t>(as->block());
+    return {b, b + as->size};
+}
+
+}  // namespace
+
+VKAPI_ATTR void VKAPI_CALL GetAccelerationStructureBuildSizesKHR(
+    VkDevice device, VkAccelerationStructureBuildTypeKHR buildType,
+    const VkAccelerationStructureBuildGeometryInfoKHR* pBuildInfo, const uint32_t* pMaxPrimitiveCounts,
+    VkAccelerationStructureBuildSizesInfoKHR* pSizeInfo) {
+    Device* dev = Device::fromHandle(device);
+    Validator v(dev, "vkGetAccelerationStructureBuildSizesKHR");
+    if (v.enabled()) {
+        v.check(dev != nullptr, "VUID-vkGetAccelerationStructureBuildSizesKHR-device-parameter",
+                "device is not a valid VkDevice.");
+        v.check(buildType == VK_ACCELERATION_STRUCTURE_BUILD_TYPE_HOST_KHR ||
+                    buildType == VK_ACCELERATION_STRUCTURE_BUILD_TYPE_DEVICE_KHR ||
+                    buildType == VK_ACCELERATION_STRUCTURE_BUILD_TYPE_HOST_OR_DEVICE_KHR,
+                "VUID-vkGetAccelerationStructureBuildSizesKHR-buildType-parameter", "buildType %d is not valid.",
+                int(buildType));
+        if (v.check(pBuildInfo != nullptr, "VUID-vkGetAccelerationStructureBuildSizesKHR-pBuildInfo-parameter",
+                    "pBuildInfo is NULL.")) {
+            checkGeometryInfo(v, *pBuildInfo, "pBuildInfo");
+            if (pBuildInfo->geometryCount != 0)
+                v.check(pMaxPrimitiveCounts != nullptr,
+                        "VUID-vkGetAccelerationStructureBuildSizesKHR-pMaxPrimitiveCounts-11612",
+                        "pMaxPrimitiveCounts is NULL but pBuildInfo->geometryCount is %u.", pBuildInfo->geometryCount);
+            if (pMaxPrimitiveCounts && pBuildInfo->type == VK_ACCELERATION_STRUCTURE_TYPE_TOP_LEVEL_KHR &&
+                pBuildInfo->geometryCount == 1)
+                v.check(pMaxPrimitiveCounts[0] <= limits::kMaxInstanceCount,
+                        "VUID-vkGetAccelerationStructureBuildSizesKHR-pBuildInfo-03785",
+                        "pMaxPrimitiveCounts[0] %u exceeds maxInstanceCount.", pMaxPrimitiveCounts[0]);
+        }
+        if (v.check(pSizeInfo != nullptr, "VUID-vkGetAccelerationStructureBuildSizesKHR-pSizeInfo-parameter",
+                    "pSizeInfo is NULL."))
+            v.check(pSizeInfo->sType == VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_BUILD_SIZES_INFO_KHR,
+                    "VUID-VkAccelerationStructureBuildSizesInfoKHR-sType-sType", "pSizeInfo->sType is %d.",
+                    int(pSizeInfo->sType));
+        if (v.failed()) return;
+    }
+    uint64_t primitives = 0;
+    for (uint32_t g = 0; g < pBuildInfo->geometryCount; ++g) primitives += pMaxPrimitiveCounts[g];
+    StructureSizes s = structureSizes(structureType(pBuildInfo->type), pBuildInfo->geometryCount, primitives);
+    pSizeInfo->accelerationStructureSize = s.structureSize;
+    pSizeInfo->buildScratchSize = s.buildScratchSize;
+    pSizeInfo->updateScratchSize = s.updateScratchSize;
+}
+
+VKAPI_ATTR VkResult VKAPI_CALL CreateAccelerationStructureKHR(VkDevice device,
+                                                              const VkAccelerationStructureCreateInfoKHR* pCreateInfo,
+                                                              const VkAllocationCallbacks*,
+                                                              VkAccelerationStructureKHR* pAccelerationStructure) {
+    Device* dev = Device::fromHandle(device);
+    Validator v(dev, "vkCreateAccelerationStructureKHR");
+    if (v.enabled()) {
+        v.check(dev != nullptr, "VUID-vkCreateAccelerationStructureKHR-device-parameter",
+                "device is not a valid VkDevice.");
+        if (v.check(pCreateInfo != nullptr, "VUID-vkCreateAccelerationStructureKHR-pCreateInfo-parameter",
+                    "pCreateInfo is NULL.")) {
+            const auto& ci = *pCreateInfo;
+            v.check(ci.sType == VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_CREATE_INFO_KHR,
+                    "VUID-VkAccelerationStructureCreateInfoKHR-sType-sType", "pCreateInfo->sType is %d.",
+                    int(ci.sType));
+            v.check(ci.type == VK_ACCELERATION_STRUCTURE_TYPE_TOP_LEVEL_KHR ||
+                        ci.type == VK_ACCELERATION_STRUCTURE_TYPE_BOTTOM_LEVEL_KHR ||
+                        ci.type == VK_ACCELERATION_STRUCTURE_TYPE_GENERIC_KHR,
+                    "VUID-VkAccelerationStructureCreateInfoKHR-type-parameter", "pCreateInfo->type %d is not valid.",
+                    int(ci.type));
+            v.check(ci.deviceAddress == 0, "VUID-vkCreateAccelerationStructureKHR-deviceAddress-03488",
+                    "pCreateInfo->deviceAddress is 0x%llx but accelerationStructureCaptureReplay is not enabled.",
+                    (ull)ci.deviceAddress);
+            v.check((ci.createFlags & VK_ACCELERATION_STRUCTURE_CREATE_DEVICE_ADDRESS_CAPTURE_REPLAY_BIT_KHR) == 0,
+                    "VUID-VkAccelerationStructureCreateInfoKHR-createFlags-03613",
+                    "createFlags has DEVICE_ADDRESS_CAPTURE_REPLAY but the feature is not enabled.");
+            v.check(ci.offset % limits::kAccelerationStructureOffsetAlignment == 0,
+                    "VUID-VkAccelerationStructureCreateInfoKHR-offset-03734",
+                    "pCreateInfo->offset %llu is not a multiple of 256.", (ull)ci.offset);
+            const Buffer* b = dev ? dev->live<Buffer>(ci.buffer, ObjectMagic::Buffer) : nullptr;
+            if (v.check(b != nullptr, "VUID-VkAccelerationStructureCreateInfoKHR-buffer-parameter",
+                        "pCreateInfo->buffer is not a live VkBuffer.")) {
+                v.check(b->usage & VK_BUFFER_USAGE_ACCELERATION_STRUCTURE_STORAGE_BIT_KHR,
+                        "VUID-VkAccelerationStructureCreateInfoKHR-buffer-03614",
+                        "pCreateInfo->buffer lacks VK_BUFFER_USAGE_ACCELERATION_STRUCTURE_STORAGE_BIT_KHR.");
+                v.check(!(b->flags & VK_BUFFER_CREATE_SPARSE_RESIDENCY_BIT),
+                        "VUID-VkAccelerationStructureCreateInfoKHR-buffer-03615",
+                        "pCreateInfo->buffer was created with SPARSE_RESIDENCY.");
+                v.check(ci.offset <= b->size && ci.size <= b->size - ci.offset,
+                        "VUID-VkAccelerationStructureCreateInfoKHR-offset-03616",
+                        "offset %llu + size %llu exceeds the buffer size %llu.", (ull)ci.offset, (ull)ci.size,
+                        (ull)b->size);
+            }
+        }
+        v.check(pAccelerationStructure != nullptr,
+                "VUID-vkCreateAccelerationStructureKHR-pAccelerationStructure-parameter",
+                "pAccelerationStructure is NULL.");
+        if (v.failed()) return VK_ERROR_VALIDATION_FAILED_EXT;
+    }
+    auto* as = new (std::nothrow) AccelerationStructure;
+    if (!as) return VK_ERROR_OUT_OF_HOST_MEMORY;
+    as->device = dev;
+    as->buffer = fromHandle<Buffer>(pCreateInfo->buffer);
+    as->offset = pCreateInfo->offset;
+    as->size = pCreateInfo->size;
+    as->type = pCreateInfo->type;
+    as->createFlags = pCreateInfo->createFlags;
+    dev->track(as);
+    *pAccelerationStructure = toHandle<VkAccelerationStructureKHR>(as);
+    return VK_SUCCESS;
+}
+
+VKAPI_ATTR void VKAPI_CALL DestroyAccelerationStructureKHR(VkDevice device,
+                                                           VkAccelerationStructureKHR accelerationStructure,
+                                                           const VkAllocationCallbacks*) {
+    Device* dev = Device::fromHandle(device);
+    if (accelerationStructure == VK_NULL_HANDLE) return;
+    Validator v(dev, "vkDestroyAccelerationStructureKHR");
+    if (v.enabled()) {
+        v.check(dev && dev->live<AccelerationStructure>(accelerationStructure, ObjectMagic::AccelerationStructure),
+                "VUID-vkDestroyAccelerationStructureKHR-accelerationStructure-parameter",
+                "accelerationStructure is not a live VkAccelerationStructureKHR.");
+        if (v.failed()) return;
+    }
+    auto* as = fromHandle<AccelerationStructure>(accelerationStructure);
+    if (dev) dev->untrack(as);
+    as->magic = ObjectMagic::Dead;
+    delete as;
+}
+
+VKAPI_ATTR VkDeviceAddress VKAPI_CALL
+GetAccelerationStructureDeviceAddressKHR(VkDevice device, const VkAccelerationStructureDeviceAddressInfoKHR* pInfo) {
+    Device* dev = Device::fromHandle(device);
+    Validator v(dev, "vkGetAccelerationStructureDeviceAddressKHR");
+    if (v.enabled()) {
+        if (v.check(pInfo != nullptr, "VUID-vkGetAccelerationStructureDeviceAddressKHR-pInfo-parameter",
+                    "pInfo is NULL.")) {
+            v.check(pInfo->sType == VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_DEVICE_ADDRESS_INFO_KHR,
+                    "VUID-VkAccelerationStructureDeviceAddressInfoKHR-sType-sType", "pInfo->sType is %d.",
+                    int(pInfo->sType));
+            const auto* as = dev ? dev->live<AccelerationStructure>(pInfo->accelerationStructure,
+                                                                    ObjectMagic::AccelerationStructure)
+                                 : nullptr;
+            if (v.check(as != nullptr,
+                        "VUID-VkAccelerationStructureDeviceAddressInfoKHR-accelerationStructure-parameter",
+                        "pInfo->accelerationStructure is not a live VkAccelerationStructureKHR.")) {
+                v.check(as->buffer->memory != nullptr, "VUID-vkGetAccelerationStructureDeviceAddressKHR-pInfo-09541",
+                        "the buffer of pInfo->accelerationStructure is not bound to memory.");
+                v.check(as->buffer->usage & VK_BUFFER_USAGE_SHADER_DEVICE_ADDRESS_BIT,
+                        "VUID-vkGetAccelerationStructureDeviceAddressKHR-pInfo-09542",
+                        "the buffer of pInfo->accelerationStructure lacks SHADER_DEVICE_ADDRESS usage.");
+            }
+        }
+        if (v.failed()) return 0;
+    }
+    return reinterpret_cast<VkDeviceAddress>(fromHandle<AccelerationStructure>(pInfo->accelerationStructure)->block());
+}
+
+namespace {
+
+// Checks one info of vkBuildAccelerationStructuresKHR against everything it can see of itself.
+void checkBuildInfo(Validator& v, const Device& dev, const VkAccelerationStructureBuildGeometryInfoKHR& info,
+                    const VkAccelerationStructureBuildRangeInfoKHR* ranges, uint32_t i) {
+    char where[32];
+    std::snprintf(where, sizeof where, "pInfos[%u]", i);
+    checkGeometryInfo(v, info, where);
+    v.check(info.mode == VK_BUILD_ACCELERATION_STRUCTURE_MODE_BUILD_KHR ||
+                info.mode == VK_BUILD_ACCELERATION_STRUCTURE_MODE_UPDATE_KHR,
+            "VUID-vkBuildAccelerationStructuresKHR-mode-04628", "%s.mode %d is not valid.", where, int(info.mode));
+    const auto* dst = dev.live<AccelerationStructure>(info.dstAccelerationStructure, ObjectMagic::AccelerationStructure);
+    if (v.check(dst != nullptr, "VUID-vkBuildAccelerationStructuresKHR-dstAccelerationStructure-03800",
+                "%s.dstAccelerationStructure is not a live VkAccelerationStructureKHR.", where)) {
+        v.check(dst->buffer->memory != nullptr, "VUID-vkBuildAccelerationStructuresKHR-pInfos-03707",
+                "%s.dstAccelerationStructure's buffer is not bound to memory.", where);
+        if (info.type == VK_ACCELERATION_STRUCTURE_TYPE_TOP_LEVEL_KHR)
+            v.check(dst->type != VK_ACCELERATION_STRUCTURE_TYPE_BOTTOM_LEVEL_KHR,
+                    "VUID-vkBuildAccelerationStructuresKHR-pInfos-03699",
+                    "%s is a top-level build into a bottom-level structure.", where);
+        if (info.type == VK_ACCELERATION_STRUCTURE_TYPE_BOTTOM_LEVEL_KHR)
+            v.check(dst->type != VK_ACCELERATION_STRUCTURE_TYPE_TOP_LEVEL_KHR,
+                    "VUID-vkBuildAccelerationStructuresKHR-pInfos-03700",
+                    "%s is a bottom-level build into a top-level structure.", where);
+    }
+    if (info.mode == VK_BUILD_ACCELERATION_STRUCTURE_MODE_UPDATE_KHR) {
+        const auto* src =
+            dev.live<AccelerationStructure>(info.srcAccelerationStructure, ObjectMagic::AccelerationStructure);
+        if (v.check(src != nullptr, "VUID-vkBuildAccelerationStructuresKHR-pInfos-04630",
+                    "%s.mode is UPDATE but srcAccelerationStructure is not a live VkAccelerationStructureKHR.", where)) {
+            const std::byte* block = src->block();
+            const auto* h = block ? format::header(block) : nullptr;
+            bool built = src->constructed && h && h->magic == format::kMagic;
+            if (v.check(built, "VUID-vkBuildAccelerationStructuresKHR-pInfos-03667",
+                        "%s.srcAccelerationStructure has not been built.", where))
+                v.check(h->buildFlags & VK_BUILD_ACCELERATION_STRUCTURE_ALLOW_UPDATE_BIT_KHR,
+                        "VUID-vkBuildAccelerationStructuresKHR-pInfos-03667",
+                        "%s.srcAccelerationStructure was not built with ALLOW_UPDATE.", where);
+        }
+    }
+    if (info.pGeometries == nullptr && info.ppGeometries == nullptr && info.geometryCount != 0) return;
+    if (!ranges) return;
+    uint64_t total = 0;
+    for (uint32_t g = 0; g < info.geometryCount; ++g) {
+        const VkAccelerationStructureGeometryKHR* geom = geometryAt(info, g);
+        if (!geom) continue;
+        const auto& r = ranges[g];
+        total += r.primitiveCount;
+        if (geom->geometryType == VK_GEOMETRY_TYPE_TRIANGLES_KHR) {
+            const auto& t = geom->geometry.triangles;
+            const VertexFormatInfo* fmt = vertexFormatInfo(t.vertexFormat);
+            const bool indexed = t.indexType != VK_INDEX_TYPE_NONE_KHR;
+            if (r.primitiveCount != 0) {
+                v.check(t.vertexData.hostAddress != nullptr, "VUID-vkBuildAccelerationStructuresKHR-pInfos-03771",
+                        "%s geometry %u: triangles.vertexData.hostAddress is NULL.", where, g);
+                if (indexed)
+                    v.check(t.indexData.hostAddress != nullptr, "VUID-vkBuildAccelerationStructuresKHR-pInfos-03772",
+                            "%s geometry %u: triangles.indexData.hostAddress is NULL with indexType %d.", where, g,
+                            int(t.indexType));
+            }
+            if (indexed) {
+                uint32_t indexSize = t.indexType == VK_INDEX_TYPE_UINT16 ? 2 : 4;
+                v.check(r.primitiveOffset % indexSize == 0,
+                        "VUID-VkAccelerationStructureBuildRangeInfoKHR-primitiveOffset-03656",
+                        "%s geometry %u: primitiveOffset %u is not a multiple of the index size %u.", where, g,
+                        r.primitiveOffset, indexSize);
+            } else if (fmt) {
+                uint32_t unit = fmt->packed ? fmt->size : fmt->componentSize;
+                v.check(r.primitiveOffset % unit == 0,
+                        "VUID-VkAccelerationStructureBuildRangeInfoKHR-primitiveOffset-03657",
+                        "%s geometry %u: primitiveOffset %u is not a multiple of %u.", where, g, r.primitiveOffset,
+                        unit);
+            }
+            if (t.transformData.hostAddress != nullptr)
+                v.check(r.transformOffset % 16 == 0,
+                        "VUID-VkAccelerationStructureBuildRangeInfoKHR-transformOffset-03658",
+                        "%s geometry %u: transformOffset %u is not a multiple of 16.", where, g, r.transformOffset);
+            // maxVertex against the vertices actually read.
+            if (r.primitiveCount != 0 && t.vertexData.hostAddress && (!indexed || t.indexData.hostAddress) &&
+                v.failureCount() == 0) {
+                if (!indexed) {
+                    uint64_t last = uint64_t(r.firstVertex) + 3ull * r.primitiveCount - 1;
+                    v.check(last <= t.maxVertex, "VUID-VkAccelerationStructureBuildRangeInfoKHR-None-10775",
+                            "%s geometry %u: firstVertex %u + 3 * primitiveCount %u - 1 = %llu exceeds maxVertex %u.",
+                            where, g, r.firstVertex, r.primitiveCount, (ull)last, t.maxVertex);
+                } else {
+                    TriangleSource source(t, r);
+                    uint64_t maxIndex = 0;
+                    for (uint32_t p = 0; p < r.primitiveCount; ++p)
+                        for (uint32_t j = 0; j < 3; ++j) maxIndex = std::max(maxIndex, source.vertexIndex(p, j));
+                    uint64_t last = uint64_t(r.firstVertex) + maxIndex;
+                    v.check(last <= t.maxVertex, "VUID-VkAccelerationStructureBuildRangeInfoKHR-maxVertex-10774",
+                            "%s geometry %u: firstVertex %u + the largest index %llu exceeds maxVertex %u.", where, g,
+                            r.firstVertex, (ull)maxIndex, t.maxVertex);
+                }
+            }
+        } else if (geom->geometryType == VK_GEOMETRY_TYPE_INSTANCES_KHR) {
+            const auto& inst = geom->geometry.instances;
+            v.check(r.primitiveOffset % 16 == 0, "VUID-VkAccelerationStructureBuildRangeInfoKHR-primitiveOffset-03660",
+                    "%s: primitiveOffset %u is not a multiple of 16.", where, r.primitiveOffset);
+            v.check(r.primitiveCount <= limits::kMaxInstanceCount, "VUID-vkBuildAccelerationStructuresKHR-pInfos-03801",
+                    "%s: primitiveCount %u exceeds maxInstanceCount.", where, r.primitiveCount);
+            if (r.primitiveCount != 0 &&
+                v.check(inst.data.hostAddress != nullptr, "VUID-vkBuildAccelerationStructuresKHR-pInfos-03778",
+                        "%s: instances.data.hostAddress is NULL.", where) &&
+                r.primitiveOffset % 16 == 0) {
+                InstanceSource source(inst, r);
+                for (uint32_t k = 0; k < r.primitiveCount; ++k) {
+                    if (inst.arrayOfPointers &&
+                        !v.check(loadUnaligned<const void*>(static_cast<const std::byte*>(inst.data.hostAddress) +
+                                                           r.primitiveOffset + 8ull * k) != nullptr,
+                                 "VUID-vkBuildAccelerationStructuresKHR-pInfos-03778",
+                                 "%s: instance pointer %u is NULL.", where, k))
+                        continue;
+                    RawInstance ri = source.fetch(k);
+                    if (ri.reference == 0) continue;
+                    const auto* blas = dev.live<AccelerationStructure>(reinterpret_cast<const void*>(ri.reference),
+                                                                       ObjectMagic::AccelerationStructure);
+                    if (!v.check(blas != nullptr, "VUID-vkBuildAccelerationStructuresKHR-pInfos-03779",
+                                 "%s: instance %u references 0x%llx, which is not a live VkAccelerationStructureKHR.",
+                                 where, k, (ull)ri.reference))
+                        continue;
+                    v.check(blas->buffer->memory != nullptr, "VUID-vkBuildAccelerationStructuresKHR-pInfos-03709",
+                            "%s: instance %u references a structure whose buffer is not bound to memory.", where, k);
+                    if (v.failureCount() > 16) break;  // enough said
+                }
+            }
+        }
+    }
+    if (info.type == VK_ACCELERATION_STRUCTURE_TYPE_BOTTOM_LEVEL_KHR)
+        v.check(total <= limits::kMaxPrimitiveCount, "VUID-VkAccelerationStructureBuildGeometryInfoKHR-type-03795",
+                "%s: the geometries hold %llu primitives, more than maxPrimitiveCount.", where, (ull)total);
+    if (dst && info.type != VK_ACCELERATION_STRUCTURE_TYPE_GENERIC_KHR) {
+        StructureSizes sizes = structureSizes(structureType(info.type), info.geometryCount, total);
+        v.check(dst->size >= sizes.structureSize, "VUID-vkBuildAccelerationStructuresKHR-pInfos-10126",
+                "%s.dstAccelerationStructure has size %llu but the build needs %llu.", where, (ull)dst->size,
+                (ull)sizes.structureSize);
+        uint64_t scratchSize = info.mode == VK_BUILD_ACCELERATION_STRUCTURE_MODE_UPDATE_KHR ? sizes.updateScratchSize
+                                                                                            : sizes.buildScratchSize;
+        if (scratchSize != 0) {
+            v.check(info.scratchData.hostAddress != nullptr,
+                    info.mode == VK_BUILD_ACCELERATION_STRUCTURE_MODE_UPDATE_KHR
+                        ? "VUID-vkBuildAccelerationStructuresKHR-pInfos-12245"
+                        : "VUID-vkBuildAccelerationStructuresKHR-pInfos-12244",
+                    "%s.scratchData.hostAddress is NULL but %llu bytes of scratch are needed.", where,
+                    (ull)scratchSize);
+            if (dst->buffer->memory) {
+                auto s = reinterpret_cast<uintptr_t>(info.scratchData.hostAddress);
+                v.check(!blockSpan(dst).overlaps(Span{s, s + scratchSize}),
+                        "VUID-vkBuildAccelerationStructuresKHR-dstAccelerationStructure-03703",
+                        "%s.scratchData overlaps the memory of its dstAccelerationStructure.", where);
+            }
+        }
+    }
+}
+
+}  // namespace
+
+VKAPI_ATTR VkResult VKAPI_CALL BuildAccelerationStructuresKHR(
+    VkDevice device, VkDeferredOperationKHR deferredOperation, uint32_t infoCount,
+    const VkAccelerationStructureBuildGeometryInfoKHR* pInfos,
+    const VkAccelerationStructureBuildRangeInfoKHR* const* ppBuildRangeInfos) {
+    Device* dev = Device::fromHandle(device);
+    Validator v(dev, "vkBuildAccelerationStructuresKHR");
+    if (v.enabled()) {
+        if (!v.check(dev != nullptr, "VUID-vkBuildAccelerationStructuresKHR-device-parameter",
+                     "device is not a valid VkDevice."))
+            return VK_ERROR_VALIDATION_FAILED_EXT;
+        v.check(deferredOperation == VK_NULL_HANDLE,
+                "VUID-vkBuildAccelerationStructuresKHR-deferredOperation-parameter",
+                "deferredOperation is not a valid VkDeferredOperationKHR.");
+        v.check(infoCount > 0, "VUID-vkBuildAccelerationStructuresKHR-infoCount-arraylength", "infoCount is 0.");
+        v.check(pInfos != nullptr || infoCount == 0, "VUID-vkBuildAccelerationStructuresKHR-pInfos-parameter",
+                "pInfos is NULL.");
+        v.check(ppBuildRangeInfos != nullptr || infoCount == 0,
+                "VUID-vkBuildAccelerationStructuresKHR-ppBuildRangeInfos-parameter", "ppBuildRangeInfos is NULL.");
+        if (v.failed()) return VK_ERROR_VALIDATION_FAILED_EXT;
+        std::unordered_set<const void*> dsts;
+        for (uint32_t i = 0; i < infoCount; ++i) {
+            v.check(ppBuildRangeInfos[i] != nullptr || pInfos[i].geometryCount == 0,
+                    "VUID-vkBuildAccelerationStructuresKHR-pInfos-11702", "ppBuildRangeInfos[%u] is NULL.", i);
+            checkBuildInfo(v, *dev, pInfos[i], ppBuildRangeInfos[i], i);
+            const void* dst = pInfos[i].dstAccelerationStructure;
+            v.check(dsts.insert(dst).second, "VUID-vkBuildAccelerationStructuresKHR-dstAccelerationStructure-03698",
+                    "pInfos[%u].dstAccelerationStructure is also the destination of an earlier info.", i);
+        }
+        for (uint32_t i = 0; i < infoCount; ++i) {
+            if (pInfos[i].mode != VK_BUILD_ACCELERATION_STRUCTURE_MODE_UPDATE_KHR) continue;
+            for (uint32_t j = 0; j < infoCount; ++j)
+                v.check(j == i || pInfos[i].srcAccelerationStructure != pInfos[j].dstAccelerationStructure,
+                        "VUID-vkBuildAccelerationStructuresKHR-dstAccelerationStructure-03403",
+                        "pInfos[%u].srcAccelerationStructure is the destination of pInfos[%u].", i, j);
+        }
+        if (v.failed()) return VK_ERROR_VALIDATION_FAILED_EXT;
+    }
+    VkResult result = VK_SUCCESS;
+    for (uint32_t i = 0; i < infoCount; ++i) {
+        auto* dst = fromHandle<AccelerationStructure>(pInfos[i].dstAccelerationStructure);
+        BuildJob job{&pInfos[i], ppBuildRangeInfos[i], dst->block(), dst->size, resolveAccelerationStructure};
+        VkResult r = buildAccelerationStructure(job);
+        if (r == VK_SUCCESS)
+            dst->constructed = true;
+        else
+            result = r;
+    }
+    return result;
+}
+
+}  // namespace vkas::entry

@@ -1,0 +1,89 @@
+// vkasTraceRays: many rays, each traced as a ray query run to completion, spread over the worker threads.
+#include <memory>
+
+#include "api/device.hpp"
+#include "api/validation.hpp"
+#include "engine/traversal.hpp"
+
+namespace vkas {
+bool validateRay(Validator& v, const AccelerationStructure* tlas, uint32_t rayFlags, const float origin[3],
+                 float tMin, const float direction[3], float tMax, const char* where);
+}
+
+namespace {
+
+constexpr uint32_t kRaysPerTask = 256;
+
+void writeHit(const vkas::RayQueryState& q, VkasHit& out) {
+    const vkas::QueryHit& h = q.committed;
+    out.type = h.type;
+    out.t = h.t;
+    if (h.type == vkas::kCommittedNone) {
+        out.instanceId = out.instanceCustomIndex = out.geometryIndex = out.primitiveIndex = -1;
+        out.barycentrics[0] = out.barycentrics[1] = 0.0f;
+        out.instanceShaderBindingTableRecordOffset = 0;
+        out.frontFace = VK_FALSE;
+        return;
+    }
+    out.instanceId = int32_t(h.instance->instanceId);
+    out.instanceCustomIndex = int32_t(h.instance->customIndexAndMask & 0xFFFFFFu);
+    out.instanceShaderBindingTableRecordOffset = h.instance->sbtOffsetAndFlags & 0xFFFFFFu;
+    out.geometryIndex = h.triangle ? int32_t(h.triangle->geometryIndex) : -1;
+    out.primitiveIndex = h.triangle ? int32_t(h.triangle->primitiveIndex) : -1;
+    out.barycentrics[0] = h.barycentrics[0];
+    out.barycentrics[1] = h.barycentrics[1];
+    out.frontFace = h.frontFace ? VK_TRUE : VK_FALSE;
+}
+
+}  // namespace
+
+extern "C" VKAS_API VkResult vkasTraceRays(VkDevice device, VkAccelerationStructureKHR topLevel, VkasTraceMode mode,
+                                           uint32_t rayFlags, uint32_t cullMask, uint32_t rayCount,
+                                           const VkasRay* pRays, VkasHit* pHits) {
+    vkas::Device* dev = vkas::Device::fromHandle(device);
+    vkas::Validator v(dev, "vkasTraceRays");
+    const vkas::AccelerationStructure* tlas = nullptr;
+    if (!dev) {
+        v.fail("VUID-vkasTraceRays-device-parameter", "device is not a valid VkDevice.");
+        return VK_ERROR_VALIDATION_FAILED_EXT;
+    }
+    if (topLevel != VK_NULL_HANDLE) {
+        tlas = dev->validationEnabled()
+                   ? dev->live<vkas::AccelerationStructure>(topLevel, vkas::ObjectMagic::AccelerationStructure)
+                   : vkas::fromHandle<vkas::AccelerationStructure>(topLevel);
+    }
+    if (v.enabled()) {
+        v.check(topLevel == VK_NULL_HANDLE || tlas != nullptr, "VUID-vkasTraceRays-topLevel-parameter",
+                "topLevel is not a live VkAccelerationStructureKHR.");
+        v.check(mode == VKAS_TRACE_MODE_CLOSEST_HIT || mode == VKAS_TRACE_MODE_ANY_HIT,
+                "VUID-vkasTraceRays-mode-parameter", "mode %d is not a VkasTraceMode.", int(mode));
+        v.check(rayCount == 0 || (pRays && pHits), "VUID-vkasTraceRays-pRays-parameter",
+                "pRays or pHits is NULL with rayCount %u.", rayCount);
+        if (!v.failed()) {
+            static const float origin[3] = {0, 0, 0}, direction[3] = {0, 0, 1};
+            vkas::validateRay(v, tlas, rayFlags, origin, 0.0f, direction, 1.0f, "");
+            for (uint32_t i = 0; i < rayCount && v.failureCount() < 8; ++i) {
+                char where[48];
+                std::snprintf(where, sizeof where, "pRays[%u]: ", i);
+                const VkasRay& r = pRays[i];
+                vkas::validateRay(v, nullptr, rayFlags, r.origin, r.tMin, r.direction, r.tMax, where);
+            }
+        }
+        if (v.failed()) return VK_ERROR_VALIDATION_FAILED_EXT;
+    }
+    const std::byte* block = tlas ? tlas->block() : nullptr;
+    const uint32_t flags = rayFlags | (mode == VKAS_TRACE_MODE_ANY_HIT ? VKAS_RAY_FLAG_TERMINATE_ON_FIRST_HIT : 0u);
+    const uint64_t tasks = (uint64_t(rayCount) + kRaysPerTask - 1) / kRaysPerTask;
+    dev->workers().parallelFor(tasks, [&](uint64_t task) {
+        auto q = std::make_unique<vkas::RayQueryState>();  // 11 KiB: kept off small worker stacks
+        uint64_t end = std::min<uint64_t>(rayCount, (task + 1) * kRaysPerTask);
+        for (uint64_t i = task * kRaysPerTask; i < end; ++i) {
+            const VkasRay& r = pRays[i];
+            vkas::queryInitialize(*q, block, vkas::resolveAccelerationStructure, flags, cullMask, r.origin, r.tMin,
+                                  r.direction, r.tMax);
+            vkas::queryRunToCompletion(*q);
+            writeHit(*q, pHits[i]);
+        }
+    });
+    return VK_SUCCESS;
+}

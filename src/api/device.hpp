@@ -1,0 +1,53 @@
+// The vkas device: the dispatchable VkDevice handle, its settings, its live objects and its worker threads.
+#pragma once
+
+#include <vulkan/vulkan_core.h>
+
+#include <memory>
+#include <mutex>
+#include <unordered_set>
+
+#include "api/objects.hpp"
+#include "api/thread_pool.hpp"
+#include "vkas/vkas.h"
+
+namespace vkas {
+
+class Device {
+public:
+    explicit Device(const VkasDeviceCreateInfo& info);
+    ~Device() { magic_ = 0; }
+
+    static Device* fromHandle(VkDevice device);
+    VkDevice handle() { return reinterpret_cast<VkDevice>(this); }
+
+    bool validationEnabled() const { return !info_.disableValidation; }
+    const VkasDeviceCreateInfo& createInfo() const { return info_; }
+    ThreadPool& workers();
+
+    // Live-object registry, so validation can recognise unknown, destroyed or wrong-type handles.
+    void track(const void* object);
+    void untrack(const void* object);
+    bool isLive(const void* object) const;
+
+    template <class T>
+    T* live(const void* handle, ObjectMagic magic) const {
+        if (!handle || !isLive(handle)) return nullptr;
+        T* object = static_cast<T*>(const_cast<void*>(handle));
+        return object->magic == magic ? object : nullptr;
+    }
+
+private:
+    static constexpr uint64_t kMagic = 0x564B41534445564Full;  // "VKASDEVO"
+    uint64_t magic_ = kMagic;  // first: the dispatchable handle points here
+    VkasDeviceCreateInfo info_;
+    mutable std::mutex mutex_;
+    std::unordered_set<const void*> objects_;
+    std::once_flag workersOnce_;
+    std::unique_ptr<ThreadPool> workers_;
+};
+
+// The block of the bottom-level structure an instance's accelerationStructureReference names (or nullptr).
+const std::byte* resolveAccelerationStructure(uint64_t reference);
+
+}  // namespace vkas

@@ -1,0 +1,39 @@
+// The Vulkan commands vkas implements, with their exact PFN_vk... signatures. proc_table.cpp maps names to them.
+#pragma once
+
+#include "vkas/vkas.h"
+
+namespace vkas::entry {
+
+// Buffers and memory (memory_commands.cpp).
+VKAPI_ATTR VkResult VKAPI_CALL CreateBuffer(VkDevice, const VkBufferCreateInfo*, const VkAllocationCallbacks*,
+                                            VkBuffer*);
+VKAPI_ATTR void VKAPI_CALL DestroyBuffer(VkDevice, VkBuffer, const VkAllocationCallbacks*);
+VKAPI_ATTR void VKAPI_CALL GetBufferMemoryRequirements(VkDevice, VkBuffer, VkMemoryRequirements*);
+VKAPI_ATTR VkResult VKAPI_CALL AllocateMemory(VkDevice, const VkMemoryAllocateInfo*, const VkAllocationCallbacks*,
+                                              VkDeviceMemory*);
+VKAPI_ATTR void VKAPI_CALL FreeMemory(VkDevice, VkDeviceMemory, const VkAllocationCallbacks*);
+VKAPI_ATTR VkResult VKAPI_CALL BindBufferMemory(VkDevice, VkBuffer, VkDeviceMemory, VkDeviceSize);
+VKAPI_ATTR VkResult VKAPI_CALL MapMemory(VkDevice, VkDeviceMemory, VkDeviceSize, VkDeviceSize, VkMemoryMapFlags,
+                                         void**);
+VKAPI_ATTR void VKAPI_CALL UnmapMemory(VkDevice, VkDeviceMemory);
+VKAPI_ATTR VkDeviceAddress VKAPI_CALL GetBufferDeviceAddress(VkDevice, const VkBufferDeviceAddressInfo*);
+VKAPI_ATTR void VKAPI_CALL DestroyDevice(VkDevice, const VkAllocationCallbacks*);
+
+// Acceleration structures (as_commands.cpp).
+VKAPI_ATTR void VKAPI_CALL GetAccelerationStructureBuildSizesKHR(VkDevice, VkAccelerationStructureBuildTypeKHR,
+                                                                 const VkAccelerationStructureBuildGeometryInfoKHR*,
+                                                                 const uint32_t*,
+                                                                 VkAccelerationStructureBuildSizesInfoKHR*);
+VKAPI_ATTR VkResult VKAPI_CALL CreateAccelerationStructureKHR(VkDevice, const VkAccelerationStructureCreateInfoKHR*,
+                                                              const VkAllocationCallbacks*,
+                                                              VkAccelerationStructureKHR*);
+VKAPI_ATTR void VKAPI_CALL DestroyAccelerationStructureKHR(VkDevice, VkAccelerationStructureKHR,
+                                                           const VkAllocationCallbacks*);
+VKAPI_ATTR VkDeviceAddress VKAPI_CALL
+GetAccelerationStructureDeviceAddressKHR(VkDevice, const VkAccelerationStructureDeviceAddressInfoKHR*);
+VKAPI_ATTR VkResult VKAPI_CALL BuildAccelerationStructuresKHR(VkDevice, VkDeferredOperationKHR, uint32_t,
+                                                              const VkAccelerationStructureBuildGeometryInfoKHR*,
+                                                              const VkAccelerationStructureBuildRangeInfoKHR* const*);
+
+}  // namespace vkas::entry

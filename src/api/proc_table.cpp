@@ -1,0 +1,77 @@
+// vkasGetDeviceProcAddr and the physical-device style queries.
+#include <cstring>
+
+#include "api/device.hpp"
+#include "api/entry_points.hpp"
+#include "api/limits.hpp"
+#include "engine/vertex_format.hpp"
+
+namespace {
+
+struct ProcEntry {
+    const char* name;
+    PFN_vkVoidFunction function;
+};
+
+#define VKAS_PROC(name, fn) {name, reinterpret_cast<PFN_vkVoidFunction>(&vkas::entry::fn)}
+const ProcEntry kProcs[] = {
+    VKAS_PROC("vkCreateBuffer", CreateBuffer),
+    VKAS_PROC("vkDestroyBuffer", DestroyBuffer),
+    VKAS_PROC("vkGetBufferMemoryRequirements", GetBufferMemoryRequirements),
+    VKAS_PROC("vkAllocateMemory", AllocateMemory),
+    VKAS_PROC("vkFreeMemory", FreeMemory),
+    VKAS_PROC("vkBindBufferMemory", BindBufferMemory),
+    VKAS_PROC("vkMapMemory", MapMemory),
+    VKAS_PROC("vkUnmapMemory", UnmapMemory),
+    VKAS_PROC("vkGetBufferDeviceAddress", GetBufferDeviceAddress),
+    VKAS_PROC("vkGetBufferDeviceAddressKHR", GetBufferDeviceAddress),
+    VKAS_PROC("vkDestroyDevice", DestroyDevice),
+    VKAS_PROC("vkGetAccelerationStructureBuildSizesKHR", GetAccelerationStructureBuildSizesKHR),
+    VKAS_PROC("vkCreateAccelerationStructureKHR", CreateAccelerationStructureKHR),
+    VKAS_PROC("vkDestroyAccelerationStructureKHR", DestroyAccelerationStructureKHR),
+    VKAS_PROC("vkGetAccelerationStructureDeviceAddressKHR", GetAccelerationStructureDeviceAddressKHR),
+    VKAS_PROC("vkBuildAccelerationStructuresKHR", BuildAccelerationStructuresKHR),
+};
+#undef VKAS_PROC
+
+}  // namespace
+
+extern "C" VKAS_API PFN_vkVoidFunction vkasGetDeviceProcAddr(VkDevice device, const char* pName) {
+    if (!vkas::Device::fromHandle(device) || !pName) return nullptr;
+    if (std::strcmp(pName, "vkGetDeviceProcAddr") == 0)
+        return reinterpret_cast<PFN_vkVoidFunction>(&vkasGetDeviceProcAddr);
+    for (const ProcEntry& e : kProcs)
+        if (std::strcmp(pName, e.name) == 0) return e.function;
+    return nullptr;
+}
+
+extern "C" VKAS_API void vkasGetAccelerationStructureFeatures(
+    VkDevice, VkPhysicalDeviceAccelerationStructureFeaturesKHR* pFeatures) {
+    if (!pFeatures) return;
+    pFeatures->accelerationStructure = VK_TRUE;
+    pFeatures->accelerationStructureCaptureReplay = VK_FALSE;
+    pFeatures->accelerationStructureIndirectBuild = VK_FALSE;
+    pFeatures->accelerationStructureHostCommands = VK_TRUE;
+    pFeatures->descriptorBindingAccelerationStructureUpdateAfterBind = VK_FALSE;
+}
+
+extern "C" VKAS_API void vkasGetAccelerationStructureProperties(
+    VkDevice, VkPhysicalDeviceAccelerationStructurePropertiesKHR* pProperties) {
+    if (!pProperties) return;
+    namespace l = vkas::limits;
+    pProperties->maxGeometryCount = l::kMaxGeometryCount;
+    pProperties->maxInstanceCount = l::kMaxInstanceCount;
+    pProperties->maxPrimitiveCount = l::kMaxPrimitiveCount;
+    pProperties->maxPerStageDescriptorAccelerationStructures = l::kMaxPerStageDescriptorAccelerationStructures;
+    pProperties->maxPerStageDescriptorUpdateAfterBindAccelerationStructures = 0;
+    pProperties->maxDescriptorSetAccelerationStructures = l::kMaxDescriptorSetAccelerationStructures;
+    pProperties->maxDescriptorSetUpdateAfterBindAccelerationStructures = 0;
+    pProperties->minAccelerationStructureScratchOffsetAlignment = l::kMinScratchOffsetAlignment;
+}
+
+extern "C" VKAS_API void vkasGetFormatProperties(VkDevice, VkFormat format, VkFormatProperties* pFormatProperties) {
+    if (!pFormatProperties) return;
+    std::memset(pFormatProperties, 0, sizeof *pFormatProperties);
+    if (vkas::vertexFormatInfo(format))
+        pFormatProperties->bufferFeatures = VK_FORMAT_FEATURE_ACCELERATION_STRUCTURE_VERTEX_BUFFER_BIT_KHR;
+}

@@ -1,0 +1,36 @@
+// Reports valid-usage violations the way the Khronos validation layers do: one message per violated rule,
+// severity ERROR, type VALIDATION, pMessageIdName = the full VUID. A command that found a violation does
+// nothing else and returns VK_ERROR_VALIDATION_FAILED_EXT.
+#pragma once
+
+#include <cstdint>
+
+#include "api/device.hpp"
+
+namespace vkas {
+
+class Validator {
+public:
+    Validator(const Device* device, const char* command);
+
+    bool enabled() const { return enabled_; }
+    bool failed() const { return failures_ != 0; }
+    uint32_t failureCount() const { return failures_; }
+
+    // Reports `vuid` with a printf-style message naming the offending info, geometry and value.
+    void fail(const char* vuid, const char* format, ...) __attribute__((format(printf, 3, 4)));
+    // Checks `ok`; reports when it is false. Returns ok.
+    template <class... Args>
+    bool check(bool ok, const char* vuid, const char* format, Args... args) {
+        if (!ok) fail(vuid, format, args...);
+        return ok;
+    }
+
+private:
+    const Device* device_;
+    const char* command_;
+    bool enabled_;
+    uint32_t failures_ = 0;
+};
+
+}  // namespace vkas

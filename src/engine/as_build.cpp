@@ -1,0 +1,213 @@
+#include "engine/as_build.hpp"
+
+#include <cmath>
+#include <cstring>
+
+#include "engine/build_sizes.hpp"
+#include "engine/bvh_builder.hpp"
+#include "engine/format.hpp"
+#include "engine/geometry_fetch.hpp"
+
+namespace vkas {
+
+using namespace format;
+
+const VkAccelerationStructureGeometryKHR& buildGeometry(const VkAccelerationStructureBuildGeometryInfoKHR& info,
+                                                        uint32_t i) {
+    return info.pGeometries ? info.pGeometries[i] : *info.ppGeometries[i];
+}
+
+namespace {
+
+std::byte* alignedScratch(const VkAccelerationStructureBuildGeometryInfoKHR& info) {
+    auto p = reinterpret_cast<uintptr_t>(info.scratchData.hostAddress);
+    p = (p + kScratchAlignment - 1) & ~uintptr_t(kScratchAlignment - 1);
+    return reinterpret_cast<std::byte*>(p);
+}
+
+void setRef(PrimRef& ref, uint32_t index, const Aabb& b) {
+    ref.lower[0] = b.lower.x, ref.lower[1] = b.lower.y, ref.lower[2] = b.lower.z;
+    ref.upper[0] = b.upper.x, ref.upper[1] = b.upper.y, ref.upper[2] = b.upper.z;
+    ref.index = index;
+    ref.pad = 0;
+}
+
+void writeHeader(std::byte* dst, StructureType type, const VkAccelerationStructureBuildGeometryInfoKHR& info,
+                 uint64_t primitiveCount, const BvhBuildResult& tree, uint32_t recordCount,
+                 const StructureLayout& layout) {
+    Header h;
+    std::memset(&h, 0, sizeof h);
+    h.magic = kMagic;
+    h.version = kVersion;
+    h.type = uint32_t(type);
+    h.buildFlags = info.flags;
+    h.usedSize = layout.end;
+    h.root = tree.root;
+    h.bounds[0] = tree.bounds.lower.x, h.bounds[1] = tree.bounds.lower.y, h.bounds[2] = tree.bounds.lower.z;
+    h.bounds[3] = tree.bounds.upper.x, h.bounds[4] = tree.bounds.upper.y, h.bounds[5] = tree.bounds.upper.z;
+    h.geometryCount = info.geometryCount;
+    h.primitiveCount = uint32_t(primitiveCount);
+    h.recordCount = recordCount;
+    h.nodeCount = tree.nodeCount;
+    h.geometryOffset = layout.geometryOffset;
+    h.nodeOffset = layout.nodeOffset;
+    h.recordOffset = layout.recordOffset;
+    std::memcpy(dst, &h, sizeof h);
+}
+
+void writeGeometryDescs(std::byte* dst, const BuildJob& job) {
+    const auto& info = *job.info;
+    for (uint32_t g = 0; g < info.geometryCount; ++g) {
+        const auto& geom = buildGeometry(info, g);
+        GeometryDesc d;
+        std::memset(&d, 0, sizeof d);
+        d.geometryType = geom.geometryType;
+        d.flags = geom.flags;
+        d.primitiveCount = job.ranges[g].primitiveCount;
+        if (geom.geometryType == VK_GEOMETRY_TYPE_TRIANGLES_KHR) {
+            d.vertexFormat = geom.geometry.triangles.vertexFormat;
+            d.indexType = geom.geometry.triangles.indexType;
+            d.maxVertex = geom.geometry.triangles.maxVertex;
+            d.hasTransform = geom.geometry.triangles.transformData.hostAddress != nullptr;
+        }
+        std::memcpy(dst + sizeof(Header) + g * sizeof(GeometryDesc), &d, sizeof d);
+    }
+}
+
+// Rounds a double bound outwards to float so the float box contains the double one.
+float roundDown(double v) {
+    float f = float(v);
+    return double(f) > v ? std::nextafter(f, -INFINITY) : f;
+}
+float roundUp(double v) {
+    float f = float(v);
+    return double(f) < v ? std::nextafter(f, INFINITY) : f;
+}
+
+Aabb instanceWorldBounds(const RawInstance& inst, const std::byte* blas) {
+    const Header* h = header(blas);
+    Affine3x4d m = affineFromFloat(inst.transform);
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    bool empty = !(h->bounds[0] <= h->bounds[3] && h->bounds[1] <= h->bounds[4] && h->bounds[2] <= h->bounds[5]);
+    if (empty) {  // a degenerate instance: a point at the instance origin
+        for (int c = 0; c < 3; ++c) lo[c] = hi[c] = m.m[c][3];
+    } else {
+        for (int corner = 0; corner < 8; ++corner) {
+            double p[3] = {h->bounds[(corner & 1) ? 3 : 0], h->bounds[(corner & 2) ? 4 : 1],
+                           h->bounds[(corner & 4) ? 5 : 2]};
+            double q[3];
+            applyAffine(m, p, q);
+            for (int c = 0; c < 3; ++c) lo[c] = std::min(lo[c], q[c]), hi[c] = std::max(hi[c], q[c]);
+        }
+    }
+    Aabb b;
+    b.lower = {roundDown(lo[0]), roundDown(lo[1]), roundDown(lo[2])};
+    b.upper = {roundUp(hi[0]), roundUp(hi[1]), roundUp(hi[2])};
+    return b;
+}
+
+VkResult buildBottomLevel(const BuildJob& job) {
+    const auto& info = *job.info;
+    uint64_t total = 0;
+    for (uint32_t g = 0; g < info.geometryCount; ++g) total += job.ranges[g].primitiveCount;
+    auto worst = structureSizes(StructureType::BottomLevel, info.geometryCount, total);
+    if (worst.structureSize > job.dstSize) return VK_ERROR_UNKNOWN;
+
+    const bool keepDegenerate = (info.flags & VK_BUILD_ACCELERATION_STRUCTURE_ALLOW_UPDATE_BIT_KHR) != 0;
+    PrimRef* refs = nullptr;
+    TriangleRecord* temp = nullptr;
+    if (total != 0) {
+        refs = reinterpret_cast<PrimRef*>(alignedScratch(info));
+        temp = reinterpret_cast<TriangleRecord*>(refs + total);
+    }
+    uint32_t n = 0;
+    for (uint32_t g = 0; g < info.geometryCount; ++g) {
+        const auto& geom = buildGeometry(info, g);
+        if (geom.geometryType != VK_GEOMETRY_TYPE_TRIANGLES_KHR) continue;  // other types come with later issues
+        TriangleSource source(geom.geometry.triangles, job.ranges[g]);
+        uint32_t flags = 0;
+        if (geom.flags & VK_GEOMETRY_OPAQUE_BIT_KHR) flags |= kTriangleOpaque;
+        if (geom.flags & VK_GEOMETRY_NO_DUPLICATE_ANY_HIT_INVOCATION_BIT_KHR) flags |= kTriangleNoDuplicateAnyHit;
+        for (uint32_t i = 0; i < source.primitiveCount(); ++i) {
+            TriangleRecord rec;
+            if (!source.fetch(i, rec.v)) continue;  // inactive: never hit, never updated back to life
+            rec.geometryIndex = g;
+            rec.primitiveIndex = i;
+            rec.flags = flags;
+            if (isDegenerateTriangle(rec.v)) {
+                if (!keepDegenerate) continue;
+                rec.flags |= kTriangleDegenerate;
+            }
+            Aabb b;
+            for (auto& v : rec.v) b.extend(Vec3{v[0], v[1], v[2]});
+            temp[n] = rec;
+            setRef(refs[n], n, b);
+            ++n;
+        }
+    }
+    StructureLayout pre = structureLayout(StructureType::BottomLevel, info.geometryCount, 0, 0);
+    auto* nodes = reinterpret_cast<Node*>(job.dst + pre.nodeOffset);
+    BvhBuildResult tree = buildWideBvh(refs, n, {maxLeafSize(StructureType::BottomLevel)}, nodes);
+    StructureLayout layout = structureLayout(StructureType::BottomLevel, info.geometryCount, tree.nodeCount, n);
+    auto* records = reinterpret_cast<TriangleRecord*>(job.dst + layout.recordOffset);
+    for (uint32_t i = 0; i < n; ++i) records[i] = temp[refs[i].index];
+    writeGeometryDescs(job.dst, job);
+    writeHeader(job.dst, StructureType::BottomLevel, info, total, tree, n, layout);
+    return VK_SUCCESS;
+}
+
+VkResult buildTopLevel(const BuildJob& job) {
+    const auto& info = *job.info;
+    uint64_t total = info.geometryCount ? job.ranges[0].primitiveCount : 0;
+    auto worst = structureSizes(StructureType::TopLevel, info.geometryCount, total);
+    if (worst.structureSize > job.dstSize) return VK_ERROR_UNKNOWN;
+
+    PrimRef* refs = nullptr;
+    InstanceRecord* temp = nullptr;
+    if (total != 0) {
+        refs = reinterpret_cast<PrimRef*>(alignedScratch(info));
+        temp = reinterpret_cast<InstanceRecord*>(refs + total);
+    }
+    uint32_t n = 0;
+    if (total != 0) {
+        InstanceSource source(buildGeometry(info, 0).geometry.instances, job.ranges[0]);
+        for (uint32_t i = 0; i < source.count(); ++i) {
+            RawInstance inst = source.fetch(i);
+            if (inst.reference == 0) continue;  // inactive instance: still counted in instance ids
+            const std::byte* blas = job.resolver ? job.resolver(inst.reference) : nullptr;
+            if (!blas) continue;  // not a structure (invalid usage, reported by validation)
+            InstanceRecord rec;
+            std::memset(&rec, 0, sizeof rec);
+            std::memcpy(rec.objectToWorld, inst.transform, sizeof rec.objectToWorld);
+            Affine3x4d inv;
+            invertAffine(affineFromFloat(inst.transform), inv);
+            for (int r = 0; r < 3; ++r)
+                for (int c = 0; c < 4; ++c) rec.worldToObject[r][c] = float(inv.m[r][c]);
+            rec.customIndexAndMask = inst.customIndexAndMask;
+            rec.sbtOffsetAndFlags = inst.sbtOffsetAndFlags;
+            rec.reference = inst.reference;
+            rec.instanceId = i;
+            temp[n] = rec;
+            setRef(refs[n], n, instanceWorldBounds(inst, blas));
+            ++n;
+        }
+    }
+    StructureLayout pre = structureLayout(StructureType::TopLevel, info.geometryCount, 0, 0);
+    auto* nodes = reinterpret_cast<Node*>(job.dst + pre.nodeOffset);
+    BvhBuildResult tree = buildWideBvh(refs, n, {maxLeafSize(StructureType::TopLevel)}, nodes);
+    StructureLayout layout = structureLayout(StructureType::TopLevel, info.geometryCount, tree.nodeCount, n);
+    auto* records = reinterpret_cast<InstanceRecord*>(job.dst + layout.recordOffset);
+    for (uint32_t i = 0; i < n; ++i) records[i] = temp[refs[i].index];
+    writeGeometryDescs(job.dst, job);
+    writeHeader(job.dst, StructureType::TopLevel, info, total, tree, n, layout);
+    return VK_SUCCESS;
+}
+
+}  // namespace
+
+VkResult buildAccelerationStructure(const BuildJob& job) {
+    if (job.info->type == VK_ACCELERATION_STRUCTURE_TYPE_TOP_LEVEL_KHR) return buildTopLevel(job);
+    return buildBottomLevel(job);
+}
+
+}  // namespace vkas

@@ -1,0 +1,39 @@
+#include "engine/build_sizes.hpp"
+
+#include "engine/bvh_builder.hpp"
+
+namespace vkas {
+
+namespace {
+constexpr uint64_t alignUp(uint64_t v, uint64_t a) { return (v + a - 1) / a * a; }
+}  // namespace
+
+uint64_t recordSize(format::StructureType type) {
+    return type == format::StructureType::TopLevel ? sizeof(format::InstanceRecord) : sizeof(format::TriangleRecord);
+}
+
+uint32_t maxLeafSize(format::StructureType type) {
+    return type == format::StructureType::TopLevel ? format::kMaxInstancesPerLeaf : format::kMaxTrianglesPerLeaf;
+}
+
+StructureLayout structureLayout(format::StructureType type, uint32_t geometryCount, uint64_t nodeCount,
+                                uint64_t recordCount) {
+    StructureLayout l;
+    l.geometryOffset = sizeof(format::Header);
+    l.nodeOffset = alignUp(l.geometryOffset + uint64_t(geometryCount) * sizeof(format::GeometryDesc), 64);
+    l.recordOffset = alignUp(l.nodeOffset + nodeCount * sizeof(format::Node), 64);
+    l.end = l.recordOffset + recordCount * recordSize(type);
+    return l;
+}
+
+StructureSizes structureSizes(format::StructureType type, uint32_t geometryCount, uint64_t primitiveCount) {
+    StructureSizes s;
+    uint64_t nodes = maxWideNodeCount(primitiveCount, maxLeafSize(type));
+    s.structureSize = structureLayout(type, geometryCount, nodes, primitiveCount).end;
+    s.buildScratchSize =
+        primitiveCount == 0 ? 0 : kScratchAlignment + primitiveCount * (sizeof(PrimRef) + recordSize(type));
+    s.updateScratchSize = s.buildScratchSize;  // an update rebuilds from its inputs for now
+    return s;
+}
+
+}  // namespace vkas

@@ -1,0 +1,38 @@
+// Top-down binned-SAH builder that writes 8-wide nodes directly: each node starts as one range and the child
+// with the largest surface area is split (binned SAH over all three axes) until it has 8 children or no child
+// is worth splitting. Deterministic: no randomness, ties broken by axis then bin order.
+#pragma once
+
+#include <cstdint>
+
+#include "engine/format.hpp"
+#include "engine/math.hpp"
+
+namespace vkas {
+
+// A primitive's bounds and its index into the build's record array. 32 bytes, lives in scratch memory.
+struct PrimRef {
+    float lower[3];
+    uint32_t index;
+    float upper[3];
+    uint32_t pad;
+};
+static_assert(sizeof(PrimRef) == 32);
+
+struct BvhBuildSettings {
+    uint32_t maxLeafSize;  // ranges of at most this many primitives become leaves
+};
+
+struct BvhBuildResult {
+    format::ChildRef root = format::kEmptyRef;
+    uint32_t nodeCount = 0;
+    Aabb bounds;
+};
+
+// Upper bound on the nodes buildWideBvh writes for n primitives (docs/FORMAT.md derives it).
+uint64_t maxWideNodeCount(uint64_t n, uint32_t maxLeafSize);
+
+// Builds over refs[0..n) (reordered in place: leaves refer to ranges of refs) into nodes[0..nodeCount).
+BvhBuildResult buildWideBvh(PrimRef* refs, uint32_t n, const BvhBuildSettings& settings, format::Node* nodes);
+
+}  // namespace vkas

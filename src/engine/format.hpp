@@ -1,0 +1,123 @@
+// The in-memory format of a vkas acceleration structure (docs/FORMAT.md describes it byte by byte).
+//
+// A structure is one contiguous block at the start of [offset, offset + size) of its buffer:
+//   Header | GeometryDesc[geometryCount] | Node[nodeCount] | TriangleRecord[] or InstanceRecord[]
+// Every offset inside is relative to the start of the block, so a byte copy of the first usedSize bytes is a
+// valid clone. Nodes are 8 wide with their child boxes stored as structure-of-arrays for SIMD box tests.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+namespace vkas::format {
+
+constexpr uint32_t kMagic = 0x5341'4B56u;  // "VKAS" read as little-endian bytes
+constexpr uint32_t kVersion = 1;
+constexpr uint32_t kNodeWidth = 8;
+constexpr uint32_t kMaxTrianglesPerLeaf = 4;
+constexpr uint32_t kMaxInstancesPerLeaf = 1;
+// Binary split depth after which the builder stops using the SAH and halves ranges instead. It bounds the tree
+// depth, which bounds the traversal stack a ray query carries (see traversal.hpp).
+constexpr uint32_t kSahDepthLimit = 32;
+constexpr uint32_t kMaxTreeDepth = kSahDepthLimit + 32;
+
+enum class StructureType : uint32_t { TopLevel = 0, BottomLevel = 1 };  // VkAccelerationStructureTypeKHR values
+
+// A child reference. 0 is an empty slot. Bits 62-63 give the kind.
+//   internal: kind 1, bits 0-31 node index
+//   leaf:     kind 2, bits 0-39 first record index, bits 40-47 record count (1-255)
+using ChildRef = uint64_t;
+constexpr ChildRef kEmptyRef = 0;
+constexpr uint64_t kKindShift = 62;
+constexpr uint64_t kKindInternal = 1;
+constexpr uint64_t kKindLeaf = 2;
+
+constexpr ChildRef makeInternalRef(uint32_t nodeIndex) { return (kKindInternal << kKindShift) | nodeIndex; }
+constexpr ChildRef makeLeafRef(uint64_t first, uint32_t count) {
+    return (kKindLeaf << kKindShift) | (uint64_t(count) << 40) | (first & 0xFF'FFFF'FFFFull);
+}
+constexpr bool isInternal(ChildRef r) { return (r >> kKindShift) == kKindInternal; }
+constexpr bool isLeaf(ChildRef r) { return (r >> kKindShift) == kKindLeaf; }
+constexpr uint32_t nodeIndex(ChildRef r) { return uint32_t(r); }
+constexpr uint64_t leafFirst(ChildRef r) { return r & 0xFF'FFFF'FFFFull; }
+constexpr uint32_t leafCount(ChildRef r) { return uint32_t((r >> 40) & 0xFF); }
+
+struct Header {
+    uint32_t magic;
+    uint32_t version;
+    uint32_t type;        // StructureType
+    uint32_t buildFlags;  // VkBuildAccelerationStructureFlagsKHR of the last build
+    uint64_t usedSize;    // bytes from the start of the block that the structure occupies
+    ChildRef root;
+    float bounds[6];  // lower xyz, upper xyz of everything in the tree (+inf/-inf when empty)
+    uint32_t geometryCount;
+    uint32_t primitiveCount;  // primitives (or instances) given to the build, inactive ones included
+    uint32_t recordCount;     // records stored in the tree
+    uint32_t nodeCount;
+    uint64_t geometryOffset;
+    uint64_t nodeOffset;
+    uint64_t recordOffset;
+    uint8_t reserved[256 - 96];
+};
+static_assert(sizeof(Header) == 256);
+
+// Per-geometry facts of the last build: flags for traversal, the rest for update validation.
+struct GeometryDesc {
+    uint32_t geometryType;  // VkGeometryTypeKHR
+    uint32_t flags;         // VkGeometryFlagsKHR
+    uint32_t primitiveCount;
+    uint32_t vertexFormat;  // triangles: VkFormat
+    uint32_t indexType;     // triangles: VkIndexType
+    uint32_t maxVertex;
+    uint32_t hasTransform;
+    uint32_t reserved;
+};
+static_assert(sizeof(GeometryDesc) == 32);
+
+struct alignas(64) Node {
+    float lowerX[kNodeWidth], upperX[kNodeWidth];
+    float lowerY[kNodeWidth], upperY[kNodeWidth];
+    float lowerZ[kNodeWidth], upperZ[kNodeWidth];
+    ChildRef child[kNodeWidth];
+};
+static_assert(sizeof(Node) == 256);
+
+// Triangle record flags.
+constexpr uint32_t kTriangleOpaque = 0x1;      // the geometry's OPAQUE flag
+constexpr uint32_t kTriangleDegenerate = 0x2;  // kept for updates, never hit
+constexpr uint32_t kTriangleNoDuplicateAnyHit = 0x4;
+
+struct TriangleRecord {
+    float v[3][3];  // object-space positions after the geometry transform, application vertex order
+    uint32_t geometryIndex;
+    uint32_t primitiveIndex;
+    uint32_t flags;
+};
+static_assert(sizeof(TriangleRecord) == 48);
+
+struct InstanceRecord {
+    float objectToWorld[3][4];
+    float worldToObject[3][4];
+    uint32_t customIndexAndMask;  // bits 0-23 custom index, 24-31 mask (as in VkAccelerationStructureInstanceKHR)
+    uint32_t sbtOffsetAndFlags;   // bits 0-23 SBT record offset, 24-31 VkGeometryInstanceFlagsKHR
+    uint64_t reference;           // the VkAccelerationStructureKHR handle of the bottom-level structure
+    uint32_t instanceId;          // index in the instance array given to the build
+    uint32_t reserved[3];
+};
+static_assert(sizeof(InstanceRecord) == 128);
+
+inline const Header* header(const std::byte* base) { return reinterpret_cast<const Header*>(base); }
+inline const GeometryDesc* geometries(const std::byte* base) {
+    return reinterpret_cast<const GeometryDesc*>(base + header(base)->geometryOffset);
+}
+inline const Node* nodes(const std::byte* base) {
+    return reinterpret_cast<const Node*>(base + header(base)->nodeOffset);
+}
+inline const TriangleRecord* triangles(const std::byte* base) {
+    return reinterpret_cast<const TriangleRecord*>(base + header(base)->recordOffset);
+}
+inline const InstanceRecord* instances(const std::byte* base) {
+    return reinterpret_cast<const InstanceRecord*>(base + header(base)->recordOffset);
+}
+
+}  // namespace vkas::format

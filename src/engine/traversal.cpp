@@ -1,0 +1,248 @@
+#include "engine/traversal.hpp"
+
+#include <cmath>
+#include <cstring>
+
+namespace vkas {
+
+using namespace format;
+
+namespace {
+
+constexpr uint32_t kRayOpaque = 0x1, kRayNoOpaque = 0x2, kRayTerminateOnFirstHit = 0x4;
+constexpr uint32_t kRayCullBack = 0x10, kRayCullFront = 0x20, kRayCullOpaque = 0x40, kRayCullNoOpaque = 0x80;
+constexpr uint32_t kRaySkipTriangles = 0x100;
+constexpr uint32_t kInstanceCullDisable = 0x1, kInstanceFlipFacing = 0x2, kInstanceForceOpaque = 0x4,
+                   kInstanceForceNoOpaque = 0x8;
+
+// Box tests accept intervals that overlap within this relative slack, so rounding in the slab computation
+// never rejects a box that the exact ray touches (Ize, "Robust BVH Ray Traversal", 2013, with extra margin
+// for the shear of the triangle test).
+constexpr float kFarSlack = 1.0f + 1.0f / 1048576.0f;
+
+inline float maxNoNan(float a, float b) { return b > a ? b : a; }  // a NaN b leaves a
+inline float minNoNan(float a, float b) { return b < a ? b : a; }
+
+void resetHit(QueryHit& h, float tMax) {
+    std::memset(&h, 0, sizeof h);
+    h.type = kCommittedNone;
+    h.t = tMax;
+}
+
+void push(RayQueryState& q, ChildRef ref, float dist) {
+    if (q.sp < kStackCapacity) {  // the depth bound of the format makes overflow impossible for valid data
+        q.stackRef[q.sp] = ref;
+        q.stackDist[q.sp] = dist;
+        ++q.sp;
+    }
+}
+
+// Tests the children of one node and pushes the hit ones, farthest first so the nearest is popped next.
+void visitNode(RayQueryState& q, const Node& node, const ShearedRay& r) {
+    float dist[kNodeWidth];
+    ChildRef ref[kNodeWidth];
+    uint32_t hits = 0;
+    const bool nx = r.invDir[0] < 0.0f, ny = r.invDir[1] < 0.0f, nz = r.invDir[2] < 0.0f;
+    for (uint32_t i = 0; i < kNodeWidth; ++i) {
+        if (node.child[i] == kEmptyRef) continue;
+        float x0 = ((nx ? node.upperX[i] : node.lowerX[i]) - r.org[0]) * r.invDir[0];
+        float x1 = ((nx ? node.lowerX[i] : node.upperX[i]) - r.org[0]) * r.invDir[0];
+        float y0 = ((ny ? node.upperY[i] : node.lowerY[i]) - r.org[1]) * r.invDir[1];
+        float y1 = ((ny ? node.lowerY[i] : node.upperY[i]) - r.org[1]) * r.invDir[1];
+        float z0 = ((nz ? node.upperZ[i] : node.lowerZ[i]) - r.org[2]) * r.invDir[2];
+        float z1 = ((nz ? node.lowerZ[i] : node.upperZ[i]) - r.org[2]) * r.invDir[2];
+        float tNear = maxNoNan(maxNoNan(maxNoNan(q.tMin, x0), y0), z0);
+        float tFar = minNoNan(minNoNan(minNoNan(q.tMax, x1), y1), z1);
+        if (tNear <= tFar * kFarSlack) {
+            // Insertion by descending distance.
+            uint32_t k = hits++;
+            while (k > 0 && dist[k - 1] < tNear) {
+                dist[k] = dist[k - 1];
+                ref[k] = ref[k - 1];
+                --k;
+            }
+            dist[k] = tNear;
+            ref[k] = node.child[i];
+        }
+    }
+    for (uint32_t k = 0; k < hits; ++k) push(q, ref[k], dist[k]);
+}
+
+void transformRay(const InstanceRecord& inst, const float o[3], const float d[3], float oo[3], float od[3]) {
+    const float(*m)[4] = inst.worldToObject;
+    for (int r = 0; r < 3; ++r) {
+        oo[r] = float(double(m[r][0]) * o[0] + double(m[r][1]) * o[1] + double(m[r][2]) * o[2] + double(m[r][3]));
+        od[r] = float(double(m[r][0]) * d[0] + double(m[r][1]) * d[1] + double(m[r][2]) * d[2]);
+    }
+}
+
+void enterInstance(RayQueryState& q, const InstanceRecord& inst) {
+    const uint32_t mask = inst.customIndexAndMask >> 24;
+    if ((mask & q.cullMask & 0xFFu) == 0) return;
+    if (q.flags & kRaySkipTriangles) return;  // bottom-level structures hold triangles only (for now)
+    const std::byte* blas = q.resolver ? q.resolver(inst.reference) : nullptr;
+    if (!blas) return;
+    const Header* h = header(blas);
+    if (h->magic != kMagic || h->type != uint32_t(StructureType::BottomLevel) || h->root == kEmptyRef) return;
+    float oo[3], od[3];
+    transformRay(inst, q.worldOrigin, q.worldDirection, oo, od);
+    prepareShearedRay(q.objectRay, oo, od);
+    q.instance = &inst;
+    q.bottomLevel = blas;
+    q.inBottomLevel = true;
+    q.topLevelStackBase = q.sp;
+    q.bottomLeafNext = q.bottomLeafEnd = 0;
+    push(q, h->root, q.tMin);
+}
+
+enum class TriangleOutcome { None, Committed, Candidate };
+
+void commit(RayQueryState& q, const QueryHit& hit, uint32_t type) {
+    q.committed = hit;
+    q.committed.type = type;
+    q.tMax = hit.t;
+    if (q.flags & kRayTerminateOnFirstHit) q.done = true;
+}
+
+TriangleOutcome testTriangle(RayQueryState& q, const TriangleRecord& tri) {
+    if (tri.flags & kTriangleDegenerate) return TriangleOutcome::None;
+    TriangleHit th;
+    if (!intersectTriangle(q.objectRay, tri.v[0], tri.v[1], tri.v[2], th)) return TriangleOutcome::None;
+    if (!(th.t > q.tMin && th.t < q.tMax)) return TriangleOutcome::None;  // strict for triangles
+    const uint32_t instanceFlags = q.instance->sbtOffsetAndFlags >> 24;
+    bool front = th.frontFace;
+    if (instanceFlags & kInstanceFlipFacing) front = !front;
+    if (!(instanceFlags & kInstanceCullDisable)) {
+        if ((q.flags & kRayCullBack) && !front) return TriangleOutcome::None;
+        if ((q.flags & kRayCullFront) && front) return TriangleOutcome::None;
+    }
+    bool opaque = (tri.flags & kTriangleOpaque) != 0;
+    if (instanceFlags & kInstanceForceOpaque)
+        opaque = true;
+    else if (instanceFlags & kInstanceForceNoOpaque)
+        opaque = false;
+    if (q.flags & kRayOpaque)
+        opaque = true;
+    else if (q.flags & kRayNoOpaque)
+        opaque = false;
+    if ((q.flags & kRayCullOpaque) && opaque) return TriangleOutcome::None;
+    if ((q.flags & kRayCullNoOpaque) && !opaque) return TriangleOutcome::None;
+
+    QueryHit& c = q.candidate;
+    c.type = kCandidateTriangle;
+    c.t = th.t;
+    c.barycentrics[0] = th.b;
+    c.barycentrics[1] = th.c;
+    c.frontFace = front;
+    c.aabbOpaque = false;
+    c.instance = q.instance;
+    c.triangle = &tri;
+    std::memcpy(c.objectOrigin, q.objectRay.org, sizeof c.objectOrigin);
+    std::memcpy(c.objectDirection, q.objectRay.dir, sizeof c.objectDirection);
+    if (opaque) {
+        commit(q, c, kCommittedTriangle);
+        return TriangleOutcome::Committed;
+    }
+    q.candidatePending = true;
+    return TriangleOutcome::Candidate;
+}
+
+}  // namespace
+
+void queryInitialize(RayQueryState& q, const std::byte* topLevel, BlasResolver resolver, uint32_t rayFlags,
+                     uint32_t cullMask, const float origin[3], float tMin, const float direction[3], float tMax) {
+    std::memcpy(q.worldOrigin, origin, sizeof q.worldOrigin);
+    std::memcpy(q.worldDirection, direction, sizeof q.worldDirection);
+    q.tMin = tMin;
+    q.tMax = tMax;
+    q.flags = rayFlags;
+    q.cullMask = cullMask;
+    q.topLevel = topLevel;
+    q.resolver = resolver;
+    q.done = false;
+    q.inBottomLevel = false;
+    q.candidatePending = false;
+    q.sp = 0;
+    q.topLevelStackBase = 0;
+    q.topLeafNext = q.topLeafEnd = 0;
+    q.bottomLeafNext = q.bottomLeafEnd = 0;
+    q.instance = nullptr;
+    q.bottomLevel = nullptr;
+    resetHit(q.candidate, tMax);
+    resetHit(q.committed, tMax);
+    prepareShearedRay(q.worldRay, origin, direction);
+    const Header* h = topLevel ? header(topLevel) : nullptr;
+    if (!h || h->magic != kMagic || h->type != uint32_t(StructureType::TopLevel) || h->root == kEmptyRef) {
+        q.done = true;  // a null acceleration structure: every ray misses
+        return;
+    }
+    push(q, h->root, tMin);
+}
+
+bool queryProceed(RayQueryState& q) {
+    q.candidatePending = false;  // an unconfirmed candidate is dropped
+    while (!q.done) {
+        if (q.inBottomLevel) {
+            if (q.bottomLeafNext < q.bottomLeafEnd) {
+                const TriangleRecord& tri = triangles(q.bottomLevel)[q.bottomLeafNext++];
+                if (testTriangle(q, tri) == TriangleOutcome::Candidate) return true;
+                continue;
+            }
+            if (q.sp == q.topLevelStackBase) {
+                q.inBottomLevel = false;
+                continue;
+            }
+        } else {
+            if (q.topLeafNext < q.topLeafEnd) {
+                enterInstance(q, instances(q.topLevel)[q.topLeafNext++]);
+                continue;
+            }
+            if (q.sp == 0) {
+                q.done = true;
+                break;
+            }
+        }
+        --q.sp;
+        const ChildRef ref = q.stackRef[q.sp];
+        if (q.stackDist[q.sp] > q.tMax * kFarSlack) continue;  // behind the committed hit
+        if (isInternal(ref)) {
+            const std::byte* base = q.inBottomLevel ? q.bottomLevel : q.topLevel;
+            visitNode(q, nodes(base)[nodeIndex(ref)], q.inBottomLevel ? q.objectRay : q.worldRay);
+        } else if (isLeaf(ref)) {
+            if (q.inBottomLevel) {
+                q.bottomLeafNext = leafFirst(ref);
+                q.bottomLeafEnd = leafFirst(ref) + leafCount(ref);
+            } else {
+                q.topLeafNext = leafFirst(ref);
+                q.topLeafEnd = leafFirst(ref) + leafCount(ref);
+            }
+        }
+    }
+    return false;
+}
+
+void queryConfirm(RayQueryState& q) {
+    if (!q.candidatePending || q.candidate.type != kCandidateTriangle) return;
+    q.candidatePending = false;
+    commit(q, q.candidate, kCommittedTriangle);
+}
+
+void queryGenerate(RayQueryState& q, float tHit) {
+    if (!q.candidatePending || q.candidate.type != kCandidateAabb) return;
+    if (!(tHit >= q.tMin && tHit <= q.tMax)) return;
+    q.candidatePending = false;
+    QueryHit h = q.candidate;
+    h.t = tHit;
+    commit(q, h, kCommittedGenerated);
+}
+
+void queryTerminate(RayQueryState& q) {
+    q.done = true;
+    q.candidatePending = false;
+}
+
+void queryRunToCompletion(RayQueryState& q) {
+    while (queryProceed(q)) queryConfirm(q);
+}
+
+}  // namespace vkas

@@ -1,0 +1,69 @@
+// Ray traversal with the semantics of SPV_KHR_ray_query, as a resumable state machine: Proceed runs until it
+// meets a candidate the caller must decide on (a non-opaque triangle), or until traversal ends. The whole
+// state, stacks included, lives in the caller's VkasRayQuery, so a query never allocates.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+#include "engine/as_build.hpp"
+#include "engine/format.hpp"
+#include "engine/triangle_intersect.hpp"
+
+namespace vkas {
+
+constexpr uint32_t kCommittedNone = 0, kCommittedTriangle = 1, kCommittedGenerated = 2;
+constexpr uint32_t kCandidateTriangle = 0, kCandidateAabb = 1;
+
+struct QueryHit {
+    uint32_t type;
+    float t;
+    float barycentrics[2];
+    bool frontFace;
+    bool aabbOpaque;
+    const format::InstanceRecord* instance;  // null for no hit
+    const format::TriangleRecord* triangle;
+    float objectOrigin[3];
+    float objectDirection[3];
+};
+
+// Each wide level pushes at most 7 siblings; two levels (top and bottom) share the stack.
+constexpr uint32_t kStackCapacity = 2 * ((format::kNodeWidth - 1) * format::kMaxTreeDepth + 1);
+
+struct RayQueryState {
+    // The ray, as given.
+    float worldOrigin[3], worldDirection[3];
+    float tMin, tMax;  // tMax shrinks to the committed t
+    uint32_t flags, cullMask;
+    const std::byte* topLevel;
+    BlasResolver resolver;
+
+    // Where traversal stands.
+    bool done;
+    bool inBottomLevel;
+    bool candidatePending;
+    uint32_t sp;
+    uint32_t topLevelStackBase;  // stack depth at which the current bottom-level traversal started
+    uint64_t topLeafNext, topLeafEnd;
+    uint64_t bottomLeafNext, bottomLeafEnd;
+    ShearedRay worldRay, objectRay;
+    const format::InstanceRecord* instance;
+    const std::byte* bottomLevel;
+
+    QueryHit candidate, committed;
+
+    format::ChildRef stackRef[kStackCapacity];
+    float stackDist[kStackCapacity];
+};
+
+void queryInitialize(RayQueryState& q, const std::byte* topLevel, BlasResolver resolver, uint32_t rayFlags,
+                     uint32_t cullMask, const float origin[3], float tMin, const float direction[3], float tMax);
+bool queryProceed(RayQueryState& q);
+void queryConfirm(RayQueryState& q);
+void queryGenerate(RayQueryState& q, float tHit);
+void queryTerminate(RayQueryState& q);
+
+// Runs a query to completion, confirming every non-opaque candidate (no any-hit shader).
+void queryRunToCompletion(RayQueryState& q);
+
+}  // namespace vkas
