@@ -1,8 +1,11 @@
 #include "api/device.hpp"
 
+#include "api/validation.hpp"
 #include "engine/format.hpp"
 
+#include <cstdlib>
 #include <new>
+#include <vector>
 #include <thread>
 
 namespace vkas {
@@ -38,6 +41,37 @@ bool Device::isLive(const void* object) const {
     return objects_.count(object) != 0;
 }
 
+size_t Device::releaseAll() {
+    std::lock_guard lock(mutex_);
+    std::vector<void*> structures, buffers, memories;
+    for (const void* o : objects_) {
+        auto* p = const_cast<void*>(o);
+        switch (*static_cast<ObjectMagic*>(p)) {
+            case ObjectMagic::AccelerationStructure: structures.push_back(p); break;
+            case ObjectMagic::Buffer: buffers.push_back(p); break;
+            case ObjectMagic::Memory: memories.push_back(p); break;
+            default: break;
+        }
+    }
+    for (void* p : structures) {
+        static_cast<AccelerationStructure*>(p)->magic = ObjectMagic::Dead;
+        delete static_cast<AccelerationStructure*>(p);
+    }
+    for (void* p : buffers) {
+        static_cast<Buffer*>(p)->magic = ObjectMagic::Dead;
+        delete static_cast<Buffer*>(p);
+    }
+    for (void* p : memories) {
+        auto* m = static_cast<Memory*>(p);
+        std::free(m->data);
+        m->magic = ObjectMagic::Dead;
+        delete m;
+    }
+    size_t n = objects_.size();
+    objects_.clear();
+    return n;
+}
+
 const std::byte* resolveAccelerationStructure(uint64_t reference) {
     auto* as = reinterpret_cast<const AccelerationStructure*>(reference);
     if (!as || as->magic != ObjectMagic::AccelerationStructure) return nullptr;
@@ -61,5 +95,15 @@ extern "C" VKAS_API VkResult vkasCreateDevice(const VkasDeviceCreateInfo* pCreat
 }
 
 extern "C" VKAS_API void vkasDestroyDevice(VkDevice device) {
-    delete Device::fromHandle(device);
+    Device* dev = Device::fromHandle(device);
+    if (!dev) return;
+    size_t leaked = dev->releaseAll();
+    if (leaked != 0 && dev->validationEnabled()) {
+        vkas::Validator v(dev, "vkDestroyDevice");
+        v.fail("VUID-vkDestroyDevice-device-05137",
+               "%zu objects (buffers, memory or acceleration structures) created from device were not destroyed; "
+               "vkas freed them.",
+               leaked);
+    }
+    delete dev;
 }

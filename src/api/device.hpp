@@ -29,6 +29,9 @@ public:
     void track(const void* object);
     void untrack(const void* object);
     bool isLive(const void* object) const;
+    // Frees every object still alive (destroying a device with live children is invalid usage; reported by
+    // vkasDestroyDevice) and returns how many there were.
+    size_t releaseAll();
 
     template <class T>
     T* live(const void* handle, ObjectMagic magic) const {

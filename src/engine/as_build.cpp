@@ -55,6 +55,14 @@ void writeHeader(std::byte* dst, StructureType type, const VkAccelerationStructu
     std::memcpy(dst, &h, sizeof h);
 }
 
+// Zeroes the alignment gaps between sections so that every byte of [0, usedSize) depends only on the inputs.
+void clearGaps(std::byte* dst, uint32_t geometryCount, uint64_t nodeCount, const StructureLayout& layout) {
+    uint64_t geometryEnd = layout.geometryOffset + uint64_t(geometryCount) * sizeof(GeometryDesc);
+    std::memset(dst + geometryEnd, 0, layout.nodeOffset - geometryEnd);
+    uint64_t nodeEnd = layout.nodeOffset + nodeCount * sizeof(Node);
+    std::memset(dst + nodeEnd, 0, layout.recordOffset - nodeEnd);
+}
+
 void writeGeometryDescs(std::byte* dst, const BuildJob& job) {
     const auto& info = *job.info;
     for (uint32_t g = 0; g < info.geometryCount; ++g) {
@@ -152,6 +160,7 @@ VkResult buildBottomLevel(const BuildJob& job) {
     auto* records = reinterpret_cast<TriangleRecord*>(job.dst + layout.recordOffset);
     for (uint32_t i = 0; i < n; ++i) records[i] = temp[refs[i].index];
     writeGeometryDescs(job.dst, job);
+    clearGaps(job.dst, info.geometryCount, tree.nodeCount, layout);
     writeHeader(job.dst, StructureType::BottomLevel, info, total, tree, n, layout);
     return VK_SUCCESS;
 }
@@ -199,6 +208,7 @@ VkResult buildTopLevel(const BuildJob& job) {
     auto* records = reinterpret_cast<InstanceRecord*>(job.dst + layout.recordOffset);
     for (uint32_t i = 0; i < n; ++i) records[i] = temp[refs[i].index];
     writeGeometryDescs(job.dst, job);
+    clearGaps(job.dst, info.geometryCount, tree.nodeCount, layout);
     writeHeader(job.dst, StructureType::TopLevel, info, total, tree, n, layout);
     return VK_SUCCESS;
 }
