@@ -1,0 +1,106 @@
+#!/usr/bin/env bash
+# The README's second command (and CI's, through .ci/run): installs the build dependencies, then
+#   1. builds RelWithDebInfo in build/ and runs the test suite (ctest) and a smoke run of the vkas tool;
+#   2. builds with AddressSanitizer + UndefinedBehaviorSanitizer in build-asan/ and runs the same there;
+#   3. installs build/ into a temporary prefix and builds the C package consumer against it
+#      (find_package(vkas) and pkg-config vkas).
+# Every step runs even when an earlier one failed (except what needs a failed build); the last line is a
+# summary and the exit status is non-zero when anything failed.
+set -uo pipefail
+root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+cd "$root"
+jobs=${VKAS_JOBS:-2}
+start=$SECONDS
+results=()
+failed=0
+logdir=$(mktemp -d "${TMPDIR:-/tmp}/vkas-tests.XXXXXX")
+trap 'rm -rf "$logdir"' EXIT
+
+record() {  # record NAME STATUS [DETAIL]
+  local name=$1 status=$2 detail=${3:-}
+  if [[ $status == 0 ]]; then
+    results+=("$name ok${detail:+ ($detail)}")
+  else
+    results+=("$name FAILED${detail:+ ($detail)}")
+    failed=1
+  fi
+}
+
+banner() { printf '\n==== %s\n' "$*"; }
+
+# ctest_in DIR NAME: runs the suite, records the pass count.
+ctest_in() {
+  local dir=$1 name=$2 log="$logdir/$2.log" status
+  ctest --test-dir "$dir" --output-on-failure -j"$jobs" 2>&1 | tee "$log"
+  status=${PIPESTATUS[0]}
+  local counts
+  counts=$(grep -Eo '[0-9]+ tests failed out of [0-9]+' "$log" | tail -1)
+  if [[ -z $counts ]] && grep -q 'No tests were found' "$log"; then
+    status=1
+    counts="no tests found"
+  fi
+  record "$name" "$status" "$counts"
+}
+
+# tool_smoke DIR NAME: `vkas info` and a small `vkas render` with the tool of that build.
+tool_smoke() {
+  local tool="$1/tools/vkas/vkas" name=$2 status=0
+  if [[ ! -x $tool ]]; then
+    record "$name" 1 "no $tool"
+    return
+  fi
+  "$tool" info >"$logdir/$name-info.log" 2>&1 || { cat "$logdir/$name-info.log"; status=1; }
+  "$tool" render --width 160 --height 120 --spp 2 --instances 300 -o "$logdir/$name.png" \
+    >"$logdir/$name-render.log" 2>&1 || { cat "$logdir/$name-render.log"; status=1; }
+  [[ -s $logdir/$name.png ]] || status=1
+  record "$name" "$status" "vkas info, vkas render 160x120"
+}
+
+banner "dependencies"
+if ! "$root/scripts/setup-deps.sh"; then
+  echo "run-tests: FAILED: could not install the build dependencies"
+  exit 1
+fi
+
+banner "build/ (RelWithDebInfo)"
+if cmake -S . -B build -DCMAKE_BUILD_TYPE=RelWithDebInfo -DVKAS_BUILD_TESTS=ON -DVKAS_BUILD_TOOLS=ON \
+     -DVKAS_SANITIZE=OFF && cmake --build build -j"$jobs"; then
+  record "build" 0
+  banner "ctest in build/"
+  ctest_in build tests
+  tool_smoke build tool
+else
+  record "build" 1
+fi
+
+banner "build-asan/ (AddressSanitizer + UndefinedBehaviorSanitizer)"
+export ASAN_OPTIONS=${ASAN_OPTIONS:-halt_on_error=1:detect_leaks=1:detect_stack_use_after_return=1:strict_string_checks=1}
+export UBSAN_OPTIONS=${UBSAN_OPTIONS:-halt_on_error=1:print_stacktrace=1}
+if cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DVKAS_BUILD_TESTS=ON -DVKAS_BUILD_TOOLS=ON \
+     -DVKAS_SANITIZE=ON && cmake --build build-asan -j"$jobs"; then
+  record "asan build" 0
+  banner "ctest in build-asan/"
+  ctest_in build-asan "asan tests"
+  tool_smoke build-asan "asan tool"
+else
+  record "asan build" 1
+fi
+unset ASAN_OPTIONS UBSAN_OPTIONS
+
+banner "package consumer (install, find_package, pkg-config)"
+if [[ -f build/CMakeCache.txt ]] && grep -q '^build ok' <(printf '%s\n' "${results[@]}"); then
+  "$root/scripts/check-package.sh" build
+  record "package" $?
+else
+  record "package" 1 "skipped: build/ did not build"
+fi
+
+elapsed=$((SECONDS - start))
+banner "summary"
+printf '  %s\n' "${results[@]}"
+summary=$(IFS=';'; echo "${results[*]}")
+if ((failed)); then
+  echo "run-tests: FAILED in ${elapsed}s: ${summary//;/, }"
+  exit 1
+fi
+echo "run-tests: PASSED in ${elapsed}s: ${summary//;/, }"

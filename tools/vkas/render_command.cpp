@@ -1,0 +1,102 @@
+#include "render_command.hpp"
+
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <thread>
+
+#include "as_builder.hpp"
+#include "png_writer.hpp"
+#include "renderer.hpp"
+#include "scene.hpp"
+#include "vk_context.hpp"
+
+namespace vkas_tool {
+namespace {
+
+double mib(double bytes) { return bytes / (1024.0 * 1024.0); }
+
+double rate(double count, double ms) { return ms > 0 ? count / (ms * 1000.0) : 0.0; }  // millions per second
+
+}  // namespace
+
+int runRender(const RenderCommandOptions& options) {
+    DeviceOptions deviceOptions;
+    deviceOptions.validation = options.validation;
+    deviceOptions.workerThreads = options.threads;
+    VkContext ctx(deviceOptions);
+    uint32_t threads = options.threads ? options.threads : std::max(1u, std::thread::hardware_concurrency());
+
+    auto t0 = std::chrono::steady_clock::now();
+    SceneOptions sceneOptions;
+    sceneOptions.instanceCount = options.instances;
+    sceneOptions.seed = options.seed;
+    Scene scene = makeBuiltinScene(sceneOptions);
+    double sceneMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    std::printf("vkas render: built-in scene, %ux%u, %u AO rays per pixel, %u trace threads, validation %s\n",
+                options.width, options.height, options.aoSamples, threads, options.validation ? "on" : "off");
+    std::printf("scene: %zu meshes generated in %.1f ms\n", scene.meshes.size(), sceneMs);
+
+    auto blas = buildBottomLevel(ctx, scene.blases, defaultBuildFlags());
+    std::printf("\nbottom level: %zu structures built in one vkBuildAccelerationStructuresKHR call\n",
+                blas->handles.size());
+    std::printf("  %-12s %10s %10s %12s %10s %14s\n", "structure", "geometries", "triangles", "size (bytes)",
+                "bytes/tri", "scratch (bytes)");
+    for (size_t i = 0; i < blas->stats.size(); ++i) {
+        const StructureStats& s = blas->stats[i];
+        std::printf("  %-12s %10zu %10llu %12llu %10.1f %14llu\n", s.name.c_str(), scene.blases[i].geometries.size(),
+                    static_cast<unsigned long long>(s.primitives), static_cast<unsigned long long>(s.size),
+                    s.primitives ? static_cast<double>(s.size) / s.primitives : 0.0,
+                    static_cast<unsigned long long>(s.buildScratchSize));
+    }
+    const uint64_t tris = blas->totalPrimitives();
+    std::printf("  %-12s %10s %10llu %12llu %10.1f %14llu\n", "total", "",
+                static_cast<unsigned long long>(tris), static_cast<unsigned long long>(blas->totalSize()),
+                tris ? static_cast<double>(blas->totalSize()) / tris : 0.0,
+                static_cast<unsigned long long>(blas->scratchBytes));
+    std::printf("  build %.2f ms (%.2f Mtris/s, one thread), sizes query %.3f ms, input data %.2f MiB\n",
+                blas->buildMs, rate(static_cast<double>(tris), blas->buildMs), blas->sizeQueryMs,
+                mib(static_cast<double>(blas->inputBytes)));
+
+    auto tlas = buildTopLevel(ctx, scene.instances, blas->handles, defaultBuildFlags());
+    const StructureStats& ts = tlas->stats[0];
+    std::printf("\ntop level: %llu instances, %llu bytes (%.1f bytes/instance), scratch %llu bytes\n",
+                static_cast<unsigned long long>(ts.primitives), static_cast<unsigned long long>(ts.size),
+                ts.primitives ? static_cast<double>(ts.size) / ts.primitives : 0.0,
+                static_cast<unsigned long long>(ts.buildScratchSize));
+    std::printf("  build %.3f ms (%.2f Minstances/s, one thread)\n", tlas->buildMs,
+                rate(static_cast<double>(ts.primitives), tlas->buildMs));
+    std::printf("  %llu triangles seen through the instances\n",
+                static_cast<unsigned long long>(scene.instancedTriangles()));
+
+    RenderOptions renderOptions;
+    renderOptions.width = options.width;
+    renderOptions.height = options.height;
+    renderOptions.aoSamples = options.aoSamples;
+    RenderStats stats;
+    Image image = render(ctx, scene, tlas->handles[0], renderOptions, stats);
+    std::printf("\ntrace (vkasTraceRays, %u threads)\n", threads);
+    std::printf("  primary    %10llu rays %9.1f ms %8.2f Mrays/s  (closest hit, %.1f%% hit)\n",
+                static_cast<unsigned long long>(stats.primaryRays), stats.primaryMs,
+                rate(static_cast<double>(stats.primaryRays), stats.primaryMs),
+                stats.primaryRays ? 100.0 * stats.primaryHits / stats.primaryRays : 0.0);
+    std::printf("  occlusion  %10llu rays %9.1f ms %8.2f Mrays/s  (any hit: AO within %.1f + sun shadow, %.1f%% hit)\n",
+                static_cast<unsigned long long>(stats.occlusionRays), stats.occlusionMs,
+                rate(static_cast<double>(stats.occlusionRays), stats.occlusionMs), scene.aoRadius,
+                stats.occlusionRays ? 100.0 * stats.occlusionHits / stats.occlusionRays : 0.0);
+    std::printf("  render total %.1f ms (ray generation and shading on one thread included)\n", stats.totalMs);
+
+    std::error_code ec;
+    std::filesystem::path parent = std::filesystem::path(options.output).parent_path();
+    if (!parent.empty()) std::filesystem::create_directories(parent, ec);  // writePng reports what still fails
+    writePng(options.output, image.width, image.height, image.rgb);
+    auto where = std::filesystem::absolute(options.output, ec);
+    std::printf("\nwrote %s (%ux%u)\n", ec ? options.output.c_str() : where.c_str(), image.width, image.height);
+    if (ctx.validationMessages() != 0) {
+        std::fprintf(stderr, "vkas render: %u validation messages\n", ctx.validationMessages());
+        return 1;
+    }
+    return 0;
+}
+
+}  // namespace vkas_tool
