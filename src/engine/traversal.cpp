@@ -3,6 +3,10 @@
 #include <cmath>
 #include <cstring>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 namespace vkas {
 
 using namespace format;
@@ -37,33 +41,65 @@ void push(RayQueryState& q, ChildRef ref, float dist) {
     }
 }
 
+// Distances at which the ray enters each child box (+inf where it misses), 4 or 8 lanes at a time.
+void childEntryDistances(const Node& node, const ShearedRay& r, float tMin, float tMax, float out[kNodeWidth]) {
+    // Near and far planes per axis, chosen by the sign of the direction. Empty slots (lower +inf, upper -inf)
+    // and NaN products (a zero direction component on a box plane) fall out of the comparisons below: NaN is
+    // never taken as a bound, so such a slab does not constrain the interval.
+    const bool nx = r.invDir[0] < 0.0f, ny = r.invDir[1] < 0.0f, nz = r.invDir[2] < 0.0f;
+    const float* nearX = nx ? node.upperX : node.lowerX;
+    const float* farX = nx ? node.lowerX : node.upperX;
+    const float* nearY = ny ? node.upperY : node.lowerY;
+    const float* farY = ny ? node.lowerY : node.upperY;
+    const float* nearZ = nz ? node.upperZ : node.lowerZ;
+    const float* farZ = nz ? node.lowerZ : node.upperZ;
+#if defined(__SSE2__)
+    const __m128 ox = _mm_set1_ps(r.org[0]), oy = _mm_set1_ps(r.org[1]), oz = _mm_set1_ps(r.org[2]);
+    const __m128 ix = _mm_set1_ps(r.invDir[0]), iy = _mm_set1_ps(r.invDir[1]), iz = _mm_set1_ps(r.invDir[2]);
+    const __m128 lo = _mm_set1_ps(tMin), hi = _mm_set1_ps(tMax), slack = _mm_set1_ps(kFarSlack);
+    const __m128 inf = _mm_set1_ps(INFINITY);
+    for (uint32_t k = 0; k < kNodeWidth; k += 4) {
+        // _mm_max_ps(v, acc) returns acc when v is NaN: the NaN-ignoring max the scalar code spells out.
+        __m128 tNear = _mm_max_ps(_mm_mul_ps(_mm_sub_ps(_mm_load_ps(nearX + k), ox), ix), lo);
+        tNear = _mm_max_ps(_mm_mul_ps(_mm_sub_ps(_mm_load_ps(nearY + k), oy), iy), tNear);
+        tNear = _mm_max_ps(_mm_mul_ps(_mm_sub_ps(_mm_load_ps(nearZ + k), oz), iz), tNear);
+        __m128 tFar = _mm_min_ps(_mm_mul_ps(_mm_sub_ps(_mm_load_ps(farX + k), ox), ix), hi);
+        tFar = _mm_min_ps(_mm_mul_ps(_mm_sub_ps(_mm_load_ps(farY + k), oy), iy), tFar);
+        tFar = _mm_min_ps(_mm_mul_ps(_mm_sub_ps(_mm_load_ps(farZ + k), oz), iz), tFar);
+        __m128 hit = _mm_cmple_ps(tNear, _mm_mul_ps(tFar, slack));
+        _mm_storeu_ps(out + k, _mm_or_ps(_mm_and_ps(hit, tNear), _mm_andnot_ps(hit, inf)));
+    }
+#else
+    for (uint32_t i = 0; i < kNodeWidth; ++i) {
+        float tNear = maxNoNan(tMin, (nearX[i] - r.org[0]) * r.invDir[0]);
+        tNear = maxNoNan(tNear, (nearY[i] - r.org[1]) * r.invDir[1]);
+        tNear = maxNoNan(tNear, (nearZ[i] - r.org[2]) * r.invDir[2]);
+        float tFar = minNoNan(tMax, (farX[i] - r.org[0]) * r.invDir[0]);
+        tFar = minNoNan(tFar, (farY[i] - r.org[1]) * r.invDir[1]);
+        tFar = minNoNan(tFar, (farZ[i] - r.org[2]) * r.invDir[2]);
+        out[i] = tNear <= tFar * kFarSlack ? tNear : INFINITY;
+    }
+#endif
+}
+
 // Tests the children of one node and pushes the hit ones, farthest first so the nearest is popped next.
 void visitNode(RayQueryState& q, const Node& node, const ShearedRay& r) {
+    float entry[kNodeWidth];
+    childEntryDistances(node, r, q.tMin, q.tMax, entry);
     float dist[kNodeWidth];
     ChildRef ref[kNodeWidth];
     uint32_t hits = 0;
-    const bool nx = r.invDir[0] < 0.0f, ny = r.invDir[1] < 0.0f, nz = r.invDir[2] < 0.0f;
     for (uint32_t i = 0; i < kNodeWidth; ++i) {
-        if (node.child[i] == kEmptyRef) continue;
-        float x0 = ((nx ? node.upperX[i] : node.lowerX[i]) - r.org[0]) * r.invDir[0];
-        float x1 = ((nx ? node.lowerX[i] : node.upperX[i]) - r.org[0]) * r.invDir[0];
-        float y0 = ((ny ? node.upperY[i] : node.lowerY[i]) - r.org[1]) * r.invDir[1];
-        float y1 = ((ny ? node.lowerY[i] : node.upperY[i]) - r.org[1]) * r.invDir[1];
-        float z0 = ((nz ? node.upperZ[i] : node.lowerZ[i]) - r.org[2]) * r.invDir[2];
-        float z1 = ((nz ? node.lowerZ[i] : node.upperZ[i]) - r.org[2]) * r.invDir[2];
-        float tNear = maxNoNan(maxNoNan(maxNoNan(q.tMin, x0), y0), z0);
-        float tFar = minNoNan(minNoNan(minNoNan(q.tMax, x1), y1), z1);
-        if (tNear <= tFar * kFarSlack) {
-            // Insertion by descending distance.
-            uint32_t k = hits++;
-            while (k > 0 && dist[k - 1] < tNear) {
-                dist[k] = dist[k - 1];
-                ref[k] = ref[k - 1];
-                --k;
-            }
-            dist[k] = tNear;
-            ref[k] = node.child[i];
+        if (entry[i] == INFINITY || node.child[i] == kEmptyRef) continue;
+        const float tNear = entry[i];
+        uint32_t k = hits++;  // insertion by descending distance
+        while (k > 0 && dist[k - 1] < tNear) {
+            dist[k] = dist[k - 1];
+            ref[k] = ref[k - 1];
+            --k;
         }
+        dist[k] = tNear;
+        ref[k] = node.child[i];
     }
     for (uint32_t k = 0; k < hits; ++k) push(q, ref[k], dist[k]);
 }
