@@ -1,0 +1,407 @@
+#include "oracle.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <stdexcept>
+#include <string>
+
+namespace oracle {
+
+namespace {
+constexpr uint32_t kRayOpaque = 0x1, kRayNoOpaque = 0x2, kRayCullBack = 0x10, kRayCullFront = 0x20,
+                   kRayCullOpaque = 0x40, kRayCullNoOpaque = 0x80, kRaySkipTriangles = 0x100;
+constexpr uint32_t kInstCullDisable = 0x1, kInstFlip = 0x2, kInstForceOpaque = 0x4, kInstForceNoOpaque = 0x8;
+
+template <typename T>
+T load(const uint8_t* p) {
+    T v;
+    std::memcpy(&v, p, sizeof(T));
+    return v;
+}
+
+double snorm(int64_t c, int bits) {
+    const double maxv = double((int64_t(1) << (bits - 1)) - 1);
+    return std::max(double(c) / maxv, -1.0);
+}
+
+// volatile: GCC 12 -O2 was observed to drop this conversion when inlined into fetchTriangles.
+double roundToFloat(double x) {
+    volatile float f = float(x);
+    return double(f);
+}
+
+Vec3 cross(const Vec3& a, const Vec3& b) {
+    return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
+}
+double dot(const Vec3& a, const Vec3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+Vec3 sub(const Vec3& a, const Vec3& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
+double norm(const Vec3& a) { return std::sqrt(dot(a, a)); }
+double maxAbs(const Vec3& a) { return std::max({std::fabs(a[0]), std::fabs(a[1]), std::fabs(a[2])}); }
+}  // namespace
+
+const std::vector<FormatInfo>& vertexFormats() {
+    static const std::vector<FormatInfo> formats = {
+        {VK_FORMAT_R32G32_SFLOAT, "R32G32_SFLOAT", 2, 4, 8, true, false},
+        {VK_FORMAT_R32G32B32_SFLOAT, "R32G32B32_SFLOAT", 3, 4, 12, true, false},
+        {VK_FORMAT_R32G32B32A32_SFLOAT, "R32G32B32A32_SFLOAT", 4, 4, 16, true, false},
+        {VK_FORMAT_R16G16_SFLOAT, "R16G16_SFLOAT", 2, 2, 4, true, false},
+        {VK_FORMAT_R16G16B16_SFLOAT, "R16G16B16_SFLOAT", 3, 2, 6, true, false},
+        {VK_FORMAT_R16G16B16A16_SFLOAT, "R16G16B16A16_SFLOAT", 4, 2, 8, true, false},
+        {VK_FORMAT_R16G16_SNORM, "R16G16_SNORM", 2, 2, 4, false, false},
+        {VK_FORMAT_R16G16B16_SNORM, "R16G16B16_SNORM", 3, 2, 6, false, false},
+        {VK_FORMAT_R16G16B16A16_SNORM, "R16G16B16A16_SNORM", 4, 2, 8, false, false},
+        {VK_FORMAT_R8G8_SNORM, "R8G8_SNORM", 2, 1, 2, false, false},
+        {VK_FORMAT_R8G8B8_SNORM, "R8G8B8_SNORM", 3, 1, 3, false, false},
+        {VK_FORMAT_R8G8B8A8_SNORM, "R8G8B8A8_SNORM", 4, 1, 4, false, false},
+        {VK_FORMAT_R64G64_SFLOAT, "R64G64_SFLOAT", 2, 8, 16, true, false},
+        {VK_FORMAT_R64G64B64_SFLOAT, "R64G64B64_SFLOAT", 3, 8, 24, true, false},
+        {VK_FORMAT_R64G64B64A64_SFLOAT, "R64G64B64A64_SFLOAT", 4, 8, 32, true, false},
+        {VK_FORMAT_A2B10G10R10_UNORM_PACK32, "A2B10G10R10_UNORM_PACK32", 4, 4, 4, false, true},
+    };
+    return formats;
+}
+
+const FormatInfo& formatInfo(VkFormat format) {
+    for (const FormatInfo& f : vertexFormats())
+        if (f.format == format) return f;
+    throw std::invalid_argument("oracle: unsupported vertex format " + std::to_string(int(format)));
+}
+
+double halfToDouble(uint16_t h) {
+    const int sign = (h >> 15) & 1;
+    const int exp = (h >> 10) & 0x1F;
+    const int mant = h & 0x3FF;
+    double v;
+    if (exp == 0)
+        v = std::ldexp(double(mant), -24);
+    else if (exp == 31)
+        v = mant ? std::numeric_limits<double>::quiet_NaN() : std::numeric_limits<double>::infinity();
+    else
+        v = std::ldexp(double(mant | 0x400), exp - 25);
+    return sign ? -v : v;
+}
+
+uint16_t floatToHalf(float f) {
+    uint32_t x;
+    std::memcpy(&x, &f, 4);
+    const uint16_t sign = uint16_t((x >> 16) & 0x8000);
+    if (std::isnan(f)) return uint16_t(sign | 0x7E00);
+    const double a = std::fabs(double(f));
+    if (a >= 65520.0) return uint16_t(sign | 0x7C00);
+    // Find the largest representable magnitude <= a by brute search over exponent, then round to nearest even.
+    if (a < std::ldexp(1.0, -14)) {  // subnormal
+        const double m = std::nearbyint(a / std::ldexp(1.0, -24));
+        return uint16_t(sign | uint16_t(m));
+    }
+    int e;
+    std::frexp(a, &e);  // a = f * 2^e, f in [0.5,1)
+    const int exp = e - 1;  // a in [2^exp, 2^(exp+1))
+    double m = std::nearbyint(a / std::ldexp(1.0, exp - 10));  // in [1024, 2048]
+    int biased = exp + 15;
+    if (m >= 2048) {
+        m = 1024;
+        ++biased;
+    }
+    if (biased >= 31) return uint16_t(sign | 0x7C00);
+    return uint16_t(sign | (biased << 10) | (uint16_t(m) & 0x3FF));
+}
+
+Vec3 decodeVertex(VkFormat format, const void* vp, bool* xIsNaN) {
+    const uint8_t* p = static_cast<const uint8_t*>(vp);
+    const FormatInfo& fi = formatInfo(format);
+    Vec3 out{0, 0, 0};
+    const uint32_t n = fi.packed ? 3 : std::min(fi.components, 3u);
+    if (fi.packed) {
+        const uint32_t w = load<uint32_t>(p);
+        out[0] = double(w & 0x3FF) / 1023.0;
+        out[1] = double((w >> 10) & 0x3FF) / 1023.0;
+        out[2] = double((w >> 20) & 0x3FF) / 1023.0;
+    } else {
+        for (uint32_t c = 0; c < n; ++c) {
+            const uint8_t* q = p + c * fi.componentSize;
+            switch (format) {
+                case VK_FORMAT_R32G32_SFLOAT:
+                case VK_FORMAT_R32G32B32_SFLOAT:
+                case VK_FORMAT_R32G32B32A32_SFLOAT: out[c] = double(load<float>(q)); break;
+                case VK_FORMAT_R16G16_SFLOAT:
+                case VK_FORMAT_R16G16B16_SFLOAT:
+                case VK_FORMAT_R16G16B16A16_SFLOAT: out[c] = halfToDouble(load<uint16_t>(q)); break;
+                case VK_FORMAT_R16G16_SNORM:
+                case VK_FORMAT_R16G16B16_SNORM:
+                case VK_FORMAT_R16G16B16A16_SNORM: out[c] = snorm(load<int16_t>(q), 16); break;
+                case VK_FORMAT_R8G8_SNORM:
+                case VK_FORMAT_R8G8B8_SNORM:
+                case VK_FORMAT_R8G8B8A8_SNORM: out[c] = snorm(load<int8_t>(q), 8); break;
+                case VK_FORMAT_R64G64_SFLOAT:
+                case VK_FORMAT_R64G64B64_SFLOAT:
+                case VK_FORMAT_R64G64B64A64_SFLOAT: out[c] = load<double>(q); break;
+                default: throw std::invalid_argument("oracle: bad format");
+            }
+        }
+    }
+    if (xIsNaN) *xIsNaN = std::isnan(out[0]);
+    return out;
+}
+
+void Blas::computeBounds() {
+    lo = {1e300, 1e300, 1e300};
+    hi = {-1e300, -1e300, -1e300};
+    for (const Geometry& g : geometries)
+        for (const Triangle& t : g.triangles) {
+            if (!t.active) continue;
+            for (const Vec3& v : t.v)
+                for (int k = 0; k < 3; ++k) {
+                    lo[k] = std::min(lo[k], v[k]);
+                    hi[k] = std::max(hi[k], v[k]);
+                }
+        }
+}
+
+Geometry fetchTriangles(const VkAccelerationStructureGeometryKHR& geometry,
+                        const VkAccelerationStructureBuildRangeInfoKHR& range) {
+    if (geometry.geometryType != VK_GEOMETRY_TYPE_TRIANGLES_KHR)
+        throw std::invalid_argument("oracle: only triangle geometries are supported");
+    const VkAccelerationStructureGeometryTrianglesDataKHR& tri = geometry.geometry.triangles;
+    Geometry out;
+    out.opaque = (geometry.flags & VK_GEOMETRY_OPAQUE_BIT_KHR) != 0;
+    const uint8_t* vbase = static_cast<const uint8_t*>(tri.vertexData.hostAddress);
+    const uint8_t* ibase = static_cast<const uint8_t*>(tri.indexData.hostAddress);
+    const uint64_t stride = tri.vertexStride;
+    bool hasTransform = tri.transformData.hostAddress != nullptr;
+    double m[3][4] = {};
+    if (hasTransform) {
+        const uint8_t* tp = static_cast<const uint8_t*>(tri.transformData.hostAddress) + range.transformOffset;
+        for (int r = 0; r < 3; ++r)
+            for (int c = 0; c < 4; ++c) m[r][c] = double(load<float>(tp + 4 * (4 * r + c)));
+    }
+    out.triangles.resize(range.primitiveCount);
+    for (uint64_t i = 0; i < range.primitiveCount; ++i) {
+        Triangle& t = out.triangles[i];
+        t.active = true;
+        for (uint64_t j = 0; j < 3; ++j) {
+            const uint8_t* addr;
+            if (tri.indexType == VK_INDEX_TYPE_NONE_KHR) {
+                addr = vbase + range.primitiveOffset + stride * (uint64_t(range.firstVertex) + 3 * i + j);
+            } else {
+                uint64_t index;
+                if (tri.indexType == VK_INDEX_TYPE_UINT16)
+                    index = load<uint16_t>(ibase + range.primitiveOffset + 2 * (3 * i + j));
+                else if (tri.indexType == VK_INDEX_TYPE_UINT32)
+                    index = load<uint32_t>(ibase + range.primitiveOffset + 4 * (3 * i + j));
+                else
+                    throw std::invalid_argument("oracle: bad index type");
+                addr = vbase + stride * (index + range.firstVertex);
+            }
+            bool nan = false;
+            Vec3 p = decodeVertex(tri.vertexFormat, addr, &nan);
+            if (nan) t.active = false;
+            if (hasTransform) {
+                Vec3 q;
+                for (int r = 0; r < 3; ++r) q[r] = m[r][0] * p[0] + m[r][1] * p[1] + m[r][2] * p[2] + m[r][3];
+                p = q;
+            }
+            for (int k = 0; k < 3; ++k) t.v[j][k] = roundToFloat(p[k]);
+        }
+    }
+    return out;
+}
+
+void invert34(const double m[3][4], double out[3][4]) {
+    const double a = m[0][0], b = m[0][1], c = m[0][2];
+    const double d = m[1][0], e = m[1][1], f = m[1][2];
+    const double g = m[2][0], h = m[2][1], i = m[2][2];
+    const double A = e * i - f * h, B = -(d * i - f * g), C = d * h - e * g;
+    const double det = a * A + b * B + c * C;
+    const double inv[3][3] = {
+        {A / det, -(b * i - c * h) / det, (b * f - c * e) / det},
+        {B / det, (a * i - c * g) / det, -(a * f - c * d) / det},
+        {C / det, -(a * h - b * g) / det, (a * e - b * d) / det},
+    };
+    for (int r = 0; r < 3; ++r) {
+        for (int k = 0; k < 3; ++k) out[r][k] = inv[r][k];
+        out[r][3] = -(inv[r][0] * m[0][3] + inv[r][1] * m[1][3] + inv[r][2] * m[2][3]);
+    }
+}
+
+Instance decodeInstance(const void* bytes, const std::function<std::shared_ptr<const Blas>(uint64_t)>& lookup) {
+    const uint8_t* p = static_cast<const uint8_t*>(bytes);
+    Instance inst;
+    for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 4; ++c) inst.toWorld[r][c] = double(load<float>(p + 4 * (4 * r + c)));
+    invert34(inst.toWorld, inst.toObject);
+    const uint32_t w0 = load<uint32_t>(p + 48), w1 = load<uint32_t>(p + 52);
+    inst.customIndex = w0 & 0xFFFFFFu;
+    inst.mask = w0 >> 24;
+    inst.sbtOffset = w1 & 0xFFFFFFu;
+    inst.flags = w1 >> 24;
+    inst.reference = load<uint64_t>(p + 56);
+    if (inst.reference != 0) {
+        inst.blas = lookup(inst.reference);
+        if (!inst.blas) throw std::invalid_argument("oracle: unknown acceleration structure reference");
+    }
+    return inst;
+}
+
+const Candidate* Result::find(int32_t instanceId, int32_t geometryIndex, int32_t primitiveIndex) const {
+    for (const Candidate& c : candidates)
+        if (c.instanceId == instanceId && c.geometryIndex == geometryIndex && c.primitiveIndex == primitiveIndex)
+            return &c;
+    return nullptr;
+}
+
+const Candidate* Result::closestRequired() const {
+    const Candidate* best = nullptr;
+    for (const Candidate& c : candidates)
+        if (!c.optional && (!best || c.t < best->t)) best = &c;
+    return best;
+}
+
+size_t Result::requiredCount() const {
+    size_t n = 0;
+    for (const Candidate& c : candidates) n += c.optional ? 0 : 1;
+    return n;
+}
+
+namespace {
+// Slab test against a box grown by a generous margin; only used to skip instances that cannot be hit.
+bool mayHitBox(const Vec3& o, const Vec3& d, Vec3 lo, Vec3 hi, double tMin, double tMax) {
+    if (lo[0] > hi[0]) return false;
+    double extent = std::max({hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2], maxAbs(lo), maxAbs(hi), 1e-6});
+    const double margin = 1e-3 * extent;
+    double t0 = -std::numeric_limits<double>::infinity(), t1 = std::numeric_limits<double>::infinity();
+    for (int k = 0; k < 3; ++k) {
+        lo[k] -= margin;
+        hi[k] += margin;
+        if (d[k] == 0) {
+            if (o[k] < lo[k] || o[k] > hi[k]) return false;
+            continue;
+        }
+        double a = (lo[k] - o[k]) / d[k], b = (hi[k] - o[k]) / d[k];
+        if (a > b) std::swap(a, b);
+        t0 = std::max(t0, a);
+        t1 = std::min(t1, b);
+    }
+    if (t0 > t1) return false;
+    if (t1 < tMin - 1e-3 * (std::fabs(tMin) + std::fabs(t1) + 1.0)) return false;
+    if (!std::isinf(tMax) && t0 > tMax + 1e-3 * (std::fabs(tMax) + std::fabs(t0) + 1.0)) return false;
+    return true;
+}
+}  // namespace
+
+Result trace(const Scene& scene, const Ray& ray, uint32_t rayFlags, uint32_t cullMask) {
+    Result result;
+    if (rayFlags & kRaySkipTriangles) return result;
+    const uint32_t mask = cullMask & 0xFFu;
+    const Vec3 ow{ray.origin[0], ray.origin[1], ray.origin[2]};
+    const Vec3 dw{ray.direction[0], ray.direction[1], ray.direction[2]};
+    const double tMin = ray.tMin, tMax = ray.tMax;
+    constexpr double kRel = 1e-5;
+
+    for (size_t id = 0; id < scene.instances.size(); ++id) {
+        const Instance& inst = scene.instances[id];
+        if (!inst.blas) continue;
+        if ((inst.mask & mask) == 0) continue;
+        const auto& M = inst.toObject;
+        Vec3 o, d;
+        for (int r = 0; r < 3; ++r) {
+            o[r] = M[r][0] * ow[0] + M[r][1] * ow[1] + M[r][2] * ow[2] + M[r][3];
+            d[r] = M[r][0] * dw[0] + M[r][1] * dw[1] + M[r][2] * dw[2];
+        }
+        if (!mayHitBox(o, d, inst.blas->lo, inst.blas->hi, tMin, tMax)) continue;
+        double minv = 0;  // infinity norm of the inverse's 3x3 part
+        for (int r = 0; r < 3; ++r) minv = std::max(minv, std::fabs(M[r][0]) + std::fabs(M[r][1]) + std::fabs(M[r][2]));
+        const double originScale = maxAbs(o) + minv * maxAbs(ow) + std::max({std::fabs(M[0][3]), std::fabs(M[1][3]), std::fabs(M[2][3])});
+        const double dlen = norm(d);
+
+        for (size_t gi = 0; gi < inst.blas->geometries.size(); ++gi) {
+            const Geometry& geom = inst.blas->geometries[gi];
+            bool opaque = geom.opaque;
+            if (inst.flags & kInstForceOpaque) opaque = true;
+            if (inst.flags & kInstForceNoOpaque) opaque = false;
+            if (rayFlags & kRayOpaque) opaque = true;
+            if (rayFlags & kRayNoOpaque) opaque = false;
+            if ((rayFlags & kRayCullOpaque) && opaque) continue;
+            if ((rayFlags & kRayCullNoOpaque) && !opaque) continue;
+
+            for (size_t pi = 0; pi < geom.triangles.size(); ++pi) {
+                const Triangle& tri = geom.triangles[pi];
+                if (!tri.active) continue;
+                const Vec3 e1 = sub(tri.v[1], tri.v[0]), e2 = sub(tri.v[2], tri.v[0]);
+                const Vec3 n = cross(e1, e2);
+                const double dn = dot(n, d);
+                if (dn == 0) continue;  // edge-on (or degenerate): never a candidate
+                const Vec3 pvec = cross(d, e2);
+                const double det = dot(e1, pvec);  // == -dn
+                const Vec3 tvec = sub(o, tri.v[0]);
+                const double u = dot(tvec, pvec) / det;
+                const Vec3 qvec = cross(tvec, e1);
+                const double v = dot(d, qvec) / det;
+                const double t = dot(e2, qvec) / det;
+                const double w = 1.0 - u - v;
+                const double nlen = norm(n);
+                const double cosv = std::fabs(dn) / (nlen * dlen);
+                if (!(cosv > 0)) continue;
+                const Vec3 hit{o[0] + t * d[0], o[1] + t * d[1], o[2] + t * d[2]};
+                const double scale = std::max({originScale, maxAbs(hit), std::fabs(t) * minv * maxAbs(dw),
+                                               maxAbs(tri.v[0]), maxAbs(tri.v[1]), maxAbs(tri.v[2]), 1e-30});
+                const double tolDist = kRel * scale;
+                // Heights of the triangle over each edge: distance from vertex k to the opposite edge.
+                const double h0 = nlen / norm(sub(tri.v[2], tri.v[1]));
+                const double h1 = nlen / norm(e2);
+                const double h2 = nlen / norm(e1);
+                const double bary[3] = {w, u, v};
+                const double heights[3] = {h0, h1, h2};
+                bool inside = true, near = true;
+                double baryTol = 0;
+                for (int k = 0; k < 3; ++k) {
+                    double margin = std::max(kRel, tolDist / (heights[k] * cosv));
+                    if (!std::isfinite(margin)) margin = std::numeric_limits<double>::infinity();
+                    baryTol = std::max(baryTol, margin);
+                    if (!(bary[k] > margin)) inside = false;
+                    if (!(bary[k] >= -margin)) near = false;
+                }
+                if (!near) continue;
+                const double tTol = kRel * std::fabs(t) + tolDist / (dlen * std::max(cosv, 1e-6));
+                bool inRange = t > tMin + tTol && t < tMax - tTol;
+                bool nearRange = t > tMin - tTol && t < tMax + tTol;
+                if (!nearRange) continue;
+
+                bool front = dn < 0;
+                if (inst.flags & kInstFlip) front = !front;
+                // Nearly edge-on, or so ill-conditioned (nearly degenerate after rounding) that the whole triangle is
+                // within the tolerance: float arithmetic may decide the facing either way.
+                const bool facingAmbiguous = cosv < 1e-6 || baryTol > 0.5;
+                bool optional = !inside || !inRange || facingAmbiguous;
+                if (!(inst.flags & kInstCullDisable)) {
+                    const bool cullThis = ((rayFlags & kRayCullBack) && !front) || ((rayFlags & kRayCullFront) && front);
+                    if (cullThis && !facingAmbiguous) continue;
+                }
+                Candidate c;
+                c.t = t;
+                c.bary[0] = u;
+                c.bary[1] = v;
+                c.instanceId = int32_t(id);
+                c.geometryIndex = int32_t(gi);
+                c.primitiveIndex = int32_t(pi);
+                c.customIndex = inst.customIndex;
+                c.sbtOffset = inst.sbtOffset;
+                c.frontFace = front;
+                c.facingAmbiguous = facingAmbiguous;
+                c.opaque = opaque;
+                c.optional = optional;
+                c.tTolerance = tTol;
+                c.baryTolerance = baryTol;
+                for (int k = 0; k < 3; ++k) {
+                    c.objectOrigin[k] = o[k];
+                    c.objectDirection[k] = d[k];
+                }
+                result.candidates.push_back(c);
+            }
+        }
+    }
+    return result;
+}
+
+}  // namespace oracle
