@@ -363,7 +363,10 @@ Result trace(const Scene& scene, const Ray& ray, uint32_t rayFlags, uint32_t cul
                     if (!(bary[k] >= -margin)) near = false;
                 }
                 if (!near) continue;
-                const double tTol = kRel * std::fabs(t) + tolDist / (dlen * std::max(cosv, 1e-6));
+                double tTol = kRel * std::fabs(t) + tolDist / (dlen * std::max(cosv, 1e-6));
+                // So ill-conditioned (nearly degenerate after rounding) that the whole triangle lies within the
+                // tolerance: its plane, hence t, is not determined by float arithmetic.
+                if (baryTol > 0.5) tTol = std::numeric_limits<double>::infinity();
                 bool inRange = t > tMin + tTol && t < tMax - tTol;
                 bool nearRange = t > tMin - tTol && t < tMax + tTol;
                 if (!nearRange) continue;
