@@ -86,15 +86,16 @@ inline bool intersectTriangle(const ShearedRay& r, const float v0[3], const floa
     }
     if ((su < 0.0f || sv < 0.0f || sw < 0.0f) && (su > 0.0f || sv > 0.0f || sw > 0.0f)) return false;
     if (su == 0.0f || sv == 0.0f || sw == 0.0f) return false;  // a collapsed edge
-    const float det = U + V + W;
-    if (det == 0.0f || !std::isfinite(det)) return false;  // edge-on: never a candidate
-    const float Az = r.sz * Az0, Bz = r.sz * Bz0, Cz = r.sz * Cz0;
-    const float T = U * Az + V * Bz + W * Cz;
-    const float inv = 1.0f / det;
-    hit.t = T * inv;
-    hit.b = V * inv;
-    hit.c = W * inv;
-    hit.frontFace = det > 0.0f;
+    // t and the barycentrics in double: the products of floats are exact there, so only the sums and the
+    // division round (a ray from z = 1 to the plane z = -2 gets t = 3 exactly, not 3 + 2 ulp).
+    const double det = double(U) + double(V) + double(W);
+    if (det == 0.0 || !std::isfinite(det)) return false;  // edge-on: never a candidate
+    const double Az = double(r.sz) * Az0, Bz = double(r.sz) * Bz0, Cz = double(r.sz) * Cz0;
+    const double T = double(U) * Az + double(V) * Bz + double(W) * Cz;
+    hit.t = float(T / det);
+    hit.b = float(double(V) / det);
+    hit.c = float(double(W) / det);
+    hit.frontFace = det > 0.0;
     return true;
 }
 
