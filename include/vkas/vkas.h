@@ -134,7 +134,7 @@ typedef struct VkasRay {
 } VkasRay;
 
 typedef struct VkasHit {
-    uint32_t type; /* VKAS_COMMITTED_INTERSECTION_*: NONE when the ray missed (the other fields are then 0/-1) */
+    uint32_t type; /* VKAS_COMMITTED_INTERSECTION_*: NONE for a miss (indices -1, t = tMax, the rest 0) */
     float t;
     int32_t instanceId;
     int32_t instanceCustomIndex;
