@@ -152,7 +152,8 @@ typedef enum VkasTraceMode {
 
 /*
  * Traces rayCount rays as if each ran a ray query to completion, confirming every non-opaque triangle candidate
- * (the behaviour of a pipeline whose any-hit shader is unused), and writes pHits[i] for pRays[i].
+ * (the behaviour of a pipeline whose any-hit shader is unused), and writes pHits[i] for pRays[i]. AABBs never
+ * produce hits here (there is no intersection shader): use a ray query and vkasRayQueryGenerateIntersection.
  * Returns VK_SUCCESS, or VK_ERROR_VALIDATION_FAILED_EXT (nothing written) when validation finds bad parameters.
  */
 VKAS_API VkResult vkasTraceRays(VkDevice device, VkAccelerationStructureKHR topLevel, VkasTraceMode mode,

@@ -71,7 +71,8 @@ void checkGeometryInfo(Validator& v, const VkAccelerationStructureBuildGeometryI
         v.check(geom->sType == VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_GEOMETRY_KHR,
                 "VUID-VkAccelerationStructureGeometryKHR-sType-sType", "%s geometry %u: sType is %d.", where, g,
                 int(geom->sType));
-        v.check(geom->geometryType == VK_GEOMETRY_TYPE_TRIANGLES_KHR || geom->geometryType == VK_GEOMETRY_TYPE_INSTANCES_KHR,
+        v.check(geom->geometryType == VK_GEOMETRY_TYPE_TRIANGLES_KHR || geom->geometryType == VK_GEOMETRY_TYPE_AABBS_KHR ||
+                    geom->geometryType == VK_GEOMETRY_TYPE_INSTANCES_KHR,
                 "VUID-VkAccelerationStructureGeometryKHR-geometryType-parameter",
                 "%s geometry %u: geometryType %d is not supported by vkas yet.", where, g, int(geom->geometryType));
         v.check((geom->flags & ~uint32_t(VK_GEOMETRY_OPAQUE_BIT_KHR | VK_GEOMETRY_NO_DUPLICATE_ANY_HIT_INVOCATION_BIT_KHR)) == 0,
@@ -110,6 +111,16 @@ void checkGeometryInfo(Validator& v, const VkAccelerationStructureBuildGeometryI
                         t.indexType == VK_INDEX_TYPE_NONE_KHR,
                     "VUID-VkAccelerationStructureGeometryTrianglesDataKHR-indexType-03798",
                     "%s geometry %u: indexType %d is not UINT16, UINT32 or NONE_KHR.", where, g, int(t.indexType));
+        }
+        if (geom->geometryType == VK_GEOMETRY_TYPE_AABBS_KHR) {
+            const auto& a = geom->geometry.aabbs;
+            v.check(a.sType == VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_GEOMETRY_AABBS_DATA_KHR,
+                    "VUID-VkAccelerationStructureGeometryAabbsDataKHR-sType-sType",
+                    "%s geometry %u: aabbs.sType is %d.", where, g, int(a.sType));
+            v.check(a.stride % 8 == 0, "VUID-VkAccelerationStructureGeometryAabbsDataKHR-stride-03545",
+                    "%s geometry %u: aabbs.stride %llu is not a multiple of 8.", where, g, (ull)a.stride);
+            v.check(a.stride <= UINT32_MAX, "VUID-VkAccelerationStructureGeometryAabbsDataKHR-stride-03820",
+                    "%s geometry %u: aabbs.stride %llu exceeds 2^32-1.", where, g, (ull)a.stride);
         }
         if (geom->geometryType == VK_GEOMETRY_TYPE_INSTANCES_KHR) {
             v.check(geom->geometry.instances.sType == VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_GEOMETRY_INSTANCES_DATA_KHR,
@@ -284,6 +295,42 @@ GetAccelerationStructureDeviceAddressKHR(VkDevice device, const VkAccelerationSt
 
 namespace {
 
+// The range and data rules of one AABB geometry of a build.
+void checkAabbRange(Validator& v, const VkAccelerationStructureGeometryAabbsDataKHR& a,
+                    const VkAccelerationStructureBuildRangeInfoKHR& r, const char* where, uint32_t g) {
+    v.check(r.primitiveOffset % 8 == 0, "VUID-VkAccelerationStructureBuildRangeInfoKHR-primitiveOffset-03659",
+            "%s geometry %u: primitiveOffset %u is not a multiple of 8.", where, g, r.primitiveOffset);
+    if (r.primitiveCount == 0) return;
+    if (!v.check(a.data.hostAddress != nullptr, "VUID-vkBuildAccelerationStructuresKHR-pInfos-03774",
+                 "%s geometry %u: aabbs.data.hostAddress is NULL.", where, g))
+        return;
+    if (v.failureCount() != 0) return;  // read the boxes only through a range that passed its rules
+    // VkAabbPositionsKHR needs min <= max on each axis; inactive boxes (minX NaN) are exempt. One message per
+    // axis, naming the first box that breaks it.
+    static const char* const kAxisVuids[3] = {"VUID-VkAabbPositionsKHR-minX-03546",
+                                              "VUID-VkAabbPositionsKHR-minY-03547",
+                                              "VUID-VkAabbPositionsKHR-minZ-03548"};
+    static const char kAxisNames[3] = {'X', 'Y', 'Z'};
+    int64_t firstBad[3] = {-1, -1, -1};
+    float badMin[3] = {}, badMax[3] = {};
+    AabbSource source(a, r);
+    for (uint32_t i = 0; i < r.primitiveCount; ++i) {
+        float lower[3], upper[3];
+        if (!source.fetch(i, lower, upper)) continue;
+        for (int axis = 0; axis < 3; ++axis)
+            if (firstBad[axis] < 0 && !(lower[axis] <= upper[axis])) {
+                firstBad[axis] = i;
+                badMin[axis] = lower[axis];
+                badMax[axis] = upper[axis];
+            }
+    }
+    for (int axis = 0; axis < 3; ++axis)
+        if (firstBad[axis] >= 0)
+            v.fail(kAxisVuids[axis], "%s geometry %u: AABB %lld has min%c %g greater than max%c %g.", where, g,
+                   (long long)firstBad[axis], kAxisNames[axis], double(badMin[axis]), kAxisNames[axis],
+                   double(badMax[axis]));
+}
+
 // Checks one info of vkBuildAccelerationStructuresKHR against everything it can see of itself.
 void checkBuildInfo(Validator& v, const Device& dev, const VkAccelerationStructureBuildGeometryInfoKHR& info,
                     const VkAccelerationStructureBuildRangeInfoKHR* ranges, uint32_t i) {
@@ -325,12 +372,23 @@ void checkBuildInfo(Validator& v, const Device& dev, const VkAccelerationStructu
     if (info.pGeometries == nullptr && info.ppGeometries == nullptr && info.geometryCount != 0) return;
     if (!ranges) return;
     uint64_t total = 0;
+    for (uint32_t g = 0; g < info.geometryCount; ++g) total += ranges[g].primitiveCount;
+    if (info.type == VK_ACCELERATION_STRUCTURE_TYPE_BOTTOM_LEVEL_KHR) {
+        const VkAccelerationStructureGeometryKHR* first = info.geometryCount ? geometryAt(info, 0) : nullptr;
+        const bool aabbs = first && first->geometryType == VK_GEOMETRY_TYPE_AABBS_KHR;
+        v.check(total <= limits::kMaxPrimitiveCount,
+                aabbs ? "VUID-VkAccelerationStructureBuildGeometryInfoKHR-type-03794"
+                      : "VUID-VkAccelerationStructureBuildGeometryInfoKHR-type-03795",
+                "%s: the geometries hold %llu %s, more than maxPrimitiveCount.", where, (ull)total,
+                aabbs ? "AABBs" : "triangles");
+    }
     for (uint32_t g = 0; g < info.geometryCount; ++g) {
         const VkAccelerationStructureGeometryKHR* geom = geometryAt(info, g);
         if (!geom) continue;
         const auto& r = ranges[g];
-        total += r.primitiveCount;
-        if (geom->geometryType == VK_GEOMETRY_TYPE_TRIANGLES_KHR) {
+        if (geom->geometryType == VK_GEOMETRY_TYPE_AABBS_KHR) {
+            checkAabbRange(v, geom->geometry.aabbs, r, where, g);
+        } else if (geom->geometryType == VK_GEOMETRY_TYPE_TRIANGLES_KHR) {
             const auto& t = geom->geometry.triangles;
             const VertexFormatInfo* fmt = vertexFormatInfo(t.vertexFormat);
             const bool indexed = t.indexType != VK_INDEX_TYPE_NONE_KHR;
@@ -411,9 +469,6 @@ void checkBuildInfo(Validator& v, const Device& dev, const VkAccelerationStructu
             }
         }
     }
-    if (info.type == VK_ACCELERATION_STRUCTURE_TYPE_BOTTOM_LEVEL_KHR)
-        v.check(total <= limits::kMaxPrimitiveCount, "VUID-VkAccelerationStructureBuildGeometryInfoKHR-type-03795",
-                "%s: the geometries hold %llu primitives, more than maxPrimitiveCount.", where, (ull)total);
     if (dst && info.type != VK_ACCELERATION_STRUCTURE_TYPE_GENERIC_KHR) {
         StructureSizes sizes = structureSizes(structureType(info.type), info.geometryCount, total);
         v.check(dst->size >= sizes.structureSize, "VUID-vkBuildAccelerationStructuresKHR-pInfos-10126",

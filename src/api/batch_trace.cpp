@@ -28,8 +28,8 @@ void writeHit(const vkas::RayQueryState& q, VkasHit& out) {
     out.instanceId = int32_t(h.instance->instanceId);
     out.instanceCustomIndex = int32_t(h.instance->customIndexAndMask & 0xFFFFFFu);
     out.instanceShaderBindingTableRecordOffset = h.instance->sbtOffsetAndFlags & 0xFFFFFFu;
-    out.geometryIndex = h.triangle ? int32_t(h.triangle->geometryIndex) : -1;
-    out.primitiveIndex = h.triangle ? int32_t(h.triangle->primitiveIndex) : -1;
+    out.geometryIndex = vkas::hitGeometryIndex(h);
+    out.primitiveIndex = vkas::hitPrimitiveIndex(h);
     out.barycentrics[0] = h.barycentrics[0];
     out.barycentrics[1] = h.barycentrics[1];
     out.frontFace = h.frontFace ? VK_TRUE : VK_FALSE;
@@ -72,7 +72,10 @@ extern "C" VKAS_API VkResult vkasTraceRays(VkDevice device, VkAccelerationStruct
         if (v.failed()) return VK_ERROR_VALIDATION_FAILED_EXT;
     }
     const std::byte* block = tlas ? tlas->block() : nullptr;
-    const uint32_t flags = rayFlags | (mode == VKAS_TRACE_MODE_ANY_HIT ? VKAS_RAY_FLAG_TERMINATE_ON_FIRST_HIT : 0u);
+    // Without an intersection shader an AABB candidate never becomes a hit, so AABB instances are skipped
+    // outright; the flag only ever removes candidates that would be dropped anyway.
+    const uint32_t flags = rayFlags | VKAS_RAY_FLAG_SKIP_AABBS |
+                           (mode == VKAS_TRACE_MODE_ANY_HIT ? VKAS_RAY_FLAG_TERMINATE_ON_FIRST_HIT : 0u);
     const uint64_t tasks = (uint64_t(rayCount) + kRaysPerTask - 1) / kRaysPerTask;
     dev->workers().parallelFor(tasks, [&](uint64_t task) {
         auto q = std::make_unique<vkas::RayQueryState>();  // 11 KiB: kept off small worker stacks

@@ -1,5 +1,5 @@
 // vkasRayQuery*: one function per SPIR-V OpRayQuery*KHR instruction, over the engine's RayQueryState that
-// lives inside the caller's VkasRayQuery.
+// lives inside the caller's VkasRayQuery, next to the device whose messenger reports the runtime rules.
 #include <cmath>
 #include <cstring>
 
@@ -14,11 +14,19 @@ namespace {
 using vkas::QueryHit;
 using vkas::RayQueryState;
 
-static_assert(sizeof(RayQueryState) <= VKAS_RAY_QUERY_SIZE, "VKAS_RAY_QUERY_SIZE is too small");
-static_assert(alignof(RayQueryState) <= 16);
+// What a VkasRayQuery holds.
+struct QueryObject {
+    RayQueryState engine;
+    const vkas::Device* device;  // of the top-level structure given to Initialize; null for a null one
+};
+static_assert(sizeof(QueryObject) <= VKAS_RAY_QUERY_SIZE, "VKAS_RAY_QUERY_SIZE is too small");
+static_assert(alignof(QueryObject) <= 16);
 
-RayQueryState& state(VkasRayQuery* q) { return *reinterpret_cast<RayQueryState*>(q->opaque); }
-const RayQueryState& state(const VkasRayQuery* q) { return *reinterpret_cast<const RayQueryState*>(q->opaque); }
+QueryObject& object(VkasRayQuery* q) { return *reinterpret_cast<QueryObject*>(q->opaque); }
+RayQueryState& state(VkasRayQuery* q) { return object(q).engine; }
+const RayQueryState& state(const VkasRayQuery* q) {
+    return reinterpret_cast<const QueryObject*>(q->opaque)->engine;
+}
 const QueryHit& hit(const VkasRayQuery* q, VkBool32 committed) {
     return committed ? state(q).committed : state(q).candidate;
 }
@@ -49,14 +57,14 @@ bool validateRay(Validator& v, const AccelerationStructure* tlas, uint32_t rayFl
                   "%sRayTmin %g and RayTmax %g must be non-negative.", where, tMin, tMax);
     ok &= v.check(!(tMin > tMax), "VUID-RuntimeSpirv-OpRayQueryInitializeKHR-06350",
                   "%sRayTmin %g is greater than RayTmax %g.", where, tMin, tMax);
-    ok &= v.check(atMostOneBit(rayFlags & kOpaqueGroup), "VUID-RuntimeSpirv-OpRayQueryInitializeKHR-06889",
+    ok &= v.check(atMostOneBit(rayFlags & kOpaqueGroup), "VUID-RuntimeSpirv-OpRayQueryInitializeKHR-06891",
                   "%sRayFlags 0x%x has more than one of Opaque, NoOpaque, CullOpaque and CullNoOpaque.", where,
                   rayFlags);
     ok &= v.check(atMostOneBit(rayFlags & kTriangleGroup), "VUID-RuntimeSpirv-OpRayQueryInitializeKHR-06890",
                   "%sRayFlags 0x%x has more than one of SkipTriangles, CullBackFacing and CullFrontFacing.", where,
                   rayFlags);
     ok &= v.check(!((rayFlags & VKAS_RAY_FLAG_SKIP_TRIANGLES) && (rayFlags & VKAS_RAY_FLAG_SKIP_AABBS)),
-                  "VUID-RuntimeSpirv-OpRayQueryInitializeKHR-06891",
+                  "VUID-RuntimeSpirv-OpRayQueryInitializeKHR-06889",
                   "%sRayFlags 0x%x has both SkipTriangles and SkipAABBs.", where, rayFlags);
     if (tlas) {
         const std::byte* block = tlas->block();
@@ -85,11 +93,24 @@ VKAS_API void vkasRayQueryInitialize(VkasRayQuery* q, VkAccelerationStructureKHR
     static const float zero[3] = {0, 0, 0};
     vkas::queryInitialize(state(q), block, vkas::resolveAccelerationStructure, rayFlags, cullMask,
                           valid ? origin : zero, valid ? tMin : 0.0f, valid ? direction : zero, valid ? tMax : 0.0f);
+    object(q).device = tlas ? tlas->device : nullptr;
 }
 
 VKAS_API VkBool32 vkasRayQueryProceed(VkasRayQuery* q) { return vkas::queryProceed(state(q)) ? VK_TRUE : VK_FALSE; }
 VKAS_API void vkasRayQueryTerminate(VkasRayQuery* q) { vkas::queryTerminate(state(q)); }
-VKAS_API void vkasRayQueryGenerateIntersection(VkasRayQuery* q, float tHit) { vkas::queryGenerate(state(q), tHit); }
+VKAS_API void vkasRayQueryGenerateIntersection(VkasRayQuery* q, float tHit) {
+    const RayQueryState& s = state(q);
+    // Without a pending AABB candidate the instruction has no effect, as in the engine.
+    if (s.candidatePending && s.candidate.type == vkas::kCandidateAabb) {
+        vkas::Validator v(object(q).device, "vkasRayQueryGenerateIntersection");
+        // s.tMax is the committed hit's t, or RayTmax while there is none: the bound 06353 names.
+        if (v.enabled())
+            v.check(tHit >= s.tMin && tHit <= s.tMax, "VUID-RuntimeSpirv-OpRayQueryGenerateIntersectionKHR-06353",
+                    "Hit T %g is outside [RayTmin %g, committed T %g]; the intersection is not generated.",
+                    double(tHit), double(s.tMin), double(s.tMax));
+    }
+    vkas::queryGenerate(state(q), tHit);  // ignores a Hit T outside that range
+}
 VKAS_API void vkasRayQueryConfirmIntersection(VkasRayQuery* q) { vkas::queryConfirm(state(q)); }
 
 VKAS_API uint32_t vkasRayQueryGetIntersectionType(const VkasRayQuery* q, VkBool32 committed) {
@@ -118,12 +139,10 @@ VKAS_API uint32_t vkasRayQueryGetIntersectionInstanceShaderBindingTableRecordOff
     return h.instance ? (h.instance->sbtOffsetAndFlags & 0xFFFFFFu) : 0u;
 }
 VKAS_API int32_t vkasRayQueryGetIntersectionGeometryIndex(const VkasRayQuery* q, VkBool32 committed) {
-    const QueryHit& h = hit(q, committed);
-    return h.triangle ? int32_t(h.triangle->geometryIndex) : -1;
+    return vkas::hitGeometryIndex(hit(q, committed));
 }
 VKAS_API int32_t vkasRayQueryGetIntersectionPrimitiveIndex(const VkasRayQuery* q, VkBool32 committed) {
-    const QueryHit& h = hit(q, committed);
-    return h.triangle ? int32_t(h.triangle->primitiveIndex) : -1;
+    return vkas::hitPrimitiveIndex(hit(q, committed));
 }
 VKAS_API void vkasRayQueryGetIntersectionBarycentrics(const VkasRayQuery* q, VkBool32 committed, float out[2]) {
     std::memcpy(out, hit(q, committed).barycentrics, 2 * sizeof(float));
@@ -157,7 +176,7 @@ VKAS_API void vkasRayQueryGetIntersectionWorldToObject(const VkasRayQuery* q, Vk
 }
 VKAS_API void vkasRayQueryGetIntersectionTriangleVertexPositions(const VkasRayQuery* q, VkBool32 committed,
                                                                  float out[3][3]) {
-    const QueryHit& h = hit(q, committed);
+    const QueryHit& h = hit(q, committed);  // AABB candidates and generated hits have no triangle: zeros
     if (h.triangle)
         std::memcpy(out, h.triangle->v, 9 * sizeof(float));
     else

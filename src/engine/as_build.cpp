@@ -32,9 +32,9 @@ void setRef(PrimRef& ref, uint32_t index, const Aabb& b) {
     ref.pad = 0;
 }
 
-void writeHeader(std::byte* dst, StructureType type, const VkAccelerationStructureBuildGeometryInfoKHR& info,
-                 uint64_t primitiveCount, const BvhBuildResult& tree, uint32_t recordCount,
-                 const StructureLayout& layout) {
+void writeHeader(std::byte* dst, StructureType type, VkGeometryTypeKHR primitiveType,
+                 const VkAccelerationStructureBuildGeometryInfoKHR& info, uint64_t primitiveCount,
+                 const BvhBuildResult& tree, uint32_t recordCount, const StructureLayout& layout) {
     Header h;
     std::memset(&h, 0, sizeof h);
     h.magic = kMagic;
@@ -52,6 +52,7 @@ void writeHeader(std::byte* dst, StructureType type, const VkAccelerationStructu
     h.geometryOffset = layout.geometryOffset;
     h.nodeOffset = layout.nodeOffset;
     h.recordOffset = layout.recordOffset;
+    h.primitiveType = primitiveType;
     std::memcpy(dst, &h, sizeof h);
 }
 
@@ -114,24 +115,14 @@ Aabb instanceWorldBounds(const RawInstance& inst, const std::byte* blas) {
     return b;
 }
 
-VkResult buildBottomLevel(const BuildJob& job) {
+// Fetches the active triangles of every triangle geometry into temp[] and refs[]; returns how many.
+uint32_t gatherTriangles(const BuildJob& job, PrimRef* refs, TriangleRecord* temp) {
     const auto& info = *job.info;
-    uint64_t total = 0;
-    for (uint32_t g = 0; g < info.geometryCount; ++g) total += job.ranges[g].primitiveCount;
-    auto worst = structureSizes(StructureType::BottomLevel, info.geometryCount, total);
-    if (worst.structureSize > job.dstSize) return VK_ERROR_UNKNOWN;
-
     const bool keepDegenerate = (info.flags & VK_BUILD_ACCELERATION_STRUCTURE_ALLOW_UPDATE_BIT_KHR) != 0;
-    PrimRef* refs = nullptr;
-    TriangleRecord* temp = nullptr;
-    if (total != 0) {
-        refs = reinterpret_cast<PrimRef*>(alignedScratch(info));
-        temp = reinterpret_cast<TriangleRecord*>(refs + total);
-    }
     uint32_t n = 0;
     for (uint32_t g = 0; g < info.geometryCount; ++g) {
         const auto& geom = buildGeometry(info, g);
-        if (geom.geometryType != VK_GEOMETRY_TYPE_TRIANGLES_KHR) continue;  // other types come with later issues
+        if (geom.geometryType != VK_GEOMETRY_TYPE_TRIANGLES_KHR) continue;
         TriangleSource source(geom.geometry.triangles, job.ranges[g]);
         uint32_t flags = 0;
         if (geom.flags & VK_GEOMETRY_OPAQUE_BIT_KHR) flags |= kTriangleOpaque;
@@ -153,15 +144,72 @@ VkResult buildBottomLevel(const BuildJob& job) {
             ++n;
         }
     }
+    return n;
+}
+
+// Fetches the active AABBs of every AABB geometry into temp[] and refs[]; returns how many. The tree bounds
+// each box exactly: the inputs are floats already.
+uint32_t gatherAabbs(const BuildJob& job, PrimRef* refs, AabbRecord* temp) {
+    const auto& info = *job.info;
+    uint32_t n = 0;
+    for (uint32_t g = 0; g < info.geometryCount; ++g) {
+        const auto& geom = buildGeometry(info, g);
+        if (geom.geometryType != VK_GEOMETRY_TYPE_AABBS_KHR) continue;
+        AabbSource source(geom.geometry.aabbs, job.ranges[g]);
+        uint32_t flags = 0;
+        if (geom.flags & VK_GEOMETRY_OPAQUE_BIT_KHR) flags |= kAabbOpaque;
+        if (geom.flags & VK_GEOMETRY_NO_DUPLICATE_ANY_HIT_INVOCATION_BIT_KHR) flags |= kAabbNoDuplicateAnyHit;
+        for (uint32_t i = 0; i < source.primitiveCount(); ++i) {
+            AabbRecord rec;
+            std::memset(&rec, 0, sizeof rec);
+            if (!source.fetch(i, rec.lower, rec.upper)) continue;  // inactive (minX NaN): still counts in indices
+            if (isInvertedAabb(rec.lower, rec.upper)) continue;    // invalid input (VUIDs 03546-03548): never hit
+            rec.geometryIndex = g;
+            rec.primitiveIndex = i;
+            rec.flags = flags;
+            Aabb b;
+            b.extend(Vec3{rec.lower[0], rec.lower[1], rec.lower[2]});
+            b.extend(Vec3{rec.upper[0], rec.upper[1], rec.upper[2]});
+            temp[n] = rec;
+            setRef(refs[n], n, b);
+            ++n;
+        }
+    }
+    return n;
+}
+
+VkResult buildBottomLevel(const BuildJob& job) {
+    const auto& info = *job.info;
+    uint64_t total = 0;
+    for (uint32_t g = 0; g < info.geometryCount; ++g) total += job.ranges[g].primitiveCount;
+    auto worst = structureSizes(StructureType::BottomLevel, info.geometryCount, total);
+    if (worst.structureSize > job.dstSize) return VK_ERROR_UNKNOWN;
+
+    // All geometries of a bottom-level structure have one type (VUID 03792): geometry 0 names it.
+    const VkGeometryTypeKHR primitiveType =
+        info.geometryCount != 0 && buildGeometry(info, 0).geometryType == VK_GEOMETRY_TYPE_AABBS_KHR
+            ? VK_GEOMETRY_TYPE_AABBS_KHR
+            : VK_GEOMETRY_TYPE_TRIANGLES_KHR;
+    constexpr size_t kRecordSize = sizeof(TriangleRecord);  // == sizeof(AabbRecord)
+    PrimRef* refs = nullptr;
+    std::byte* temp = nullptr;
+    if (total != 0) {
+        refs = reinterpret_cast<PrimRef*>(alignedScratch(info));
+        temp = reinterpret_cast<std::byte*>(refs + total);
+    }
+    const uint32_t n = primitiveType == VK_GEOMETRY_TYPE_AABBS_KHR
+                           ? gatherAabbs(job, refs, reinterpret_cast<AabbRecord*>(temp))
+                           : gatherTriangles(job, refs, reinterpret_cast<TriangleRecord*>(temp));
     StructureLayout pre = structureLayout(StructureType::BottomLevel, info.geometryCount, 0, 0);
     auto* nodes = reinterpret_cast<Node*>(job.dst + pre.nodeOffset);
     BvhBuildResult tree = buildWideBvh(refs, n, {maxLeafSize(StructureType::BottomLevel)}, nodes);
     StructureLayout layout = structureLayout(StructureType::BottomLevel, info.geometryCount, tree.nodeCount, n);
-    auto* records = reinterpret_cast<TriangleRecord*>(job.dst + layout.recordOffset);
-    for (uint32_t i = 0; i < n; ++i) records[i] = temp[refs[i].index];
+    std::byte* records = job.dst + layout.recordOffset;
+    for (uint32_t i = 0; i < n; ++i)
+        std::memcpy(records + uint64_t(i) * kRecordSize, temp + uint64_t(refs[i].index) * kRecordSize, kRecordSize);
     writeGeometryDescs(job.dst, job);
     clearGaps(job.dst, info.geometryCount, tree.nodeCount, layout);
-    writeHeader(job.dst, StructureType::BottomLevel, info, total, tree, n, layout);
+    writeHeader(job.dst, StructureType::BottomLevel, primitiveType, info, total, tree, n, layout);
     return VK_SUCCESS;
 }
 
@@ -209,7 +257,7 @@ VkResult buildTopLevel(const BuildJob& job) {
     for (uint32_t i = 0; i < n; ++i) records[i] = temp[refs[i].index];
     writeGeometryDescs(job.dst, job);
     clearGaps(job.dst, info.geometryCount, tree.nodeCount, layout);
-    writeHeader(job.dst, StructureType::TopLevel, info, total, tree, n, layout);
+    writeHeader(job.dst, StructureType::TopLevel, VK_GEOMETRY_TYPE_INSTANCES_KHR, info, total, tree, n, layout);
     return VK_SUCCESS;
 }
 

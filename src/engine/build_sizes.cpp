@@ -9,11 +9,12 @@ constexpr uint64_t alignUp(uint64_t v, uint64_t a) { return (v + a - 1) / a * a;
 }  // namespace
 
 uint64_t recordSize(format::StructureType type) {
+    // Triangle and AABB records have the same size (format.hpp asserts it).
     return type == format::StructureType::TopLevel ? sizeof(format::InstanceRecord) : sizeof(format::TriangleRecord);
 }
 
 uint32_t maxLeafSize(format::StructureType type) {
-    return type == format::StructureType::TopLevel ? format::kMaxInstancesPerLeaf : format::kMaxTrianglesPerLeaf;
+    return type == format::StructureType::TopLevel ? format::kMaxInstancesPerLeaf : format::kMaxPrimitivesPerLeaf;
 }
 
 StructureLayout structureLayout(format::StructureType type, uint32_t geometryCount, uint64_t nodeCount,

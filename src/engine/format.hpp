@@ -1,7 +1,7 @@
 // The in-memory format of a vkas acceleration structure (docs/FORMAT.md describes it byte by byte).
 //
 // A structure is one contiguous block at the start of [offset, offset + size) of its buffer:
-//   Header | GeometryDesc[geometryCount] | Node[nodeCount] | TriangleRecord[] or InstanceRecord[]
+//   Header | GeometryDesc[geometryCount] | Node[nodeCount] | TriangleRecord[], AabbRecord[] or InstanceRecord[]
 // Every offset inside is relative to the start of the block, so a byte copy of the first usedSize bytes is a
 // valid clone. Nodes are 8 wide with their child boxes stored as structure-of-arrays for SIMD box tests.
 #pragma once
@@ -14,7 +14,7 @@ namespace vkas::format {
 constexpr uint32_t kMagic = 0x5341'4B56u;  // "VKAS" read as little-endian bytes
 constexpr uint32_t kVersion = 1;
 constexpr uint32_t kNodeWidth = 8;
-constexpr uint32_t kMaxTrianglesPerLeaf = 4;
+constexpr uint32_t kMaxPrimitivesPerLeaf = 4;  // triangles or AABBs
 constexpr uint32_t kMaxInstancesPerLeaf = 1;
 // Binary split depth after which the builder stops using the SAH and halves ranges instead. It bounds the tree
 // depth, which bounds the traversal stack a ray query carries (see traversal.hpp).
@@ -57,7 +57,10 @@ struct Header {
     uint64_t geometryOffset;
     uint64_t nodeOffset;
     uint64_t recordOffset;
-    uint8_t reserved[256 - 96];
+    // VkGeometryTypeKHR of the records: TRIANGLES (0), AABBS (1) or INSTANCES (2). A bottom-level structure holds
+    // one geometry type only (VUID 03792), so traversal branches on it once per instance, not per record.
+    uint32_t primitiveType;
+    uint8_t reserved[256 - 100];
 };
 static_assert(sizeof(Header) == 256);
 
@@ -86,6 +89,9 @@ static_assert(sizeof(Node) == 256);
 constexpr uint32_t kTriangleOpaque = 0x1;      // the geometry's OPAQUE flag
 constexpr uint32_t kTriangleDegenerate = 0x2;  // kept for updates, never hit
 constexpr uint32_t kTriangleNoDuplicateAnyHit = 0x4;
+// AABB record flags: the same bits as for triangles.
+constexpr uint32_t kAabbOpaque = kTriangleOpaque;
+constexpr uint32_t kAabbNoDuplicateAnyHit = kTriangleNoDuplicateAnyHit;
 
 struct TriangleRecord {
     float v[3][3];  // object-space positions after the geometry transform, application vertex order
@@ -94,6 +100,18 @@ struct TriangleRecord {
     uint32_t flags;
 };
 static_assert(sizeof(TriangleRecord) == 48);
+
+// One active VkAabbPositionsKHR, as given (already floats: the tree bounds it exactly).
+struct AabbRecord {
+    float lower[3];  // minX, minY, minZ
+    float upper[3];  // maxX, maxY, maxZ
+    uint32_t geometryIndex;
+    uint32_t primitiveIndex;
+    uint32_t flags;
+    uint32_t reserved[3];
+};
+// Same size as a triangle record, so the build-size formula holds for both kinds of bottom-level structure.
+static_assert(sizeof(AabbRecord) == sizeof(TriangleRecord));
 
 struct InstanceRecord {
     float objectToWorld[3][4];
@@ -115,6 +133,9 @@ inline const Node* nodes(const std::byte* base) {
 }
 inline const TriangleRecord* triangles(const std::byte* base) {
     return reinterpret_cast<const TriangleRecord*>(base + header(base)->recordOffset);
+}
+inline const AabbRecord* aabbs(const std::byte* base) {
+    return reinterpret_cast<const AabbRecord*>(base + header(base)->recordOffset);
 }
 inline const InstanceRecord* instances(const std::byte* base) {
     return reinterpret_cast<const InstanceRecord*>(base + header(base)->recordOffset);

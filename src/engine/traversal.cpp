@@ -3,6 +3,8 @@
 #include <cmath>
 #include <cstring>
 
+#include "engine/aabb_intersect.hpp"
+
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #endif
@@ -15,7 +17,7 @@ namespace {
 
 constexpr uint32_t kRayOpaque = 0x1, kRayNoOpaque = 0x2, kRayTerminateOnFirstHit = 0x4;
 constexpr uint32_t kRayCullBack = 0x10, kRayCullFront = 0x20, kRayCullOpaque = 0x40, kRayCullNoOpaque = 0x80;
-constexpr uint32_t kRaySkipTriangles = 0x100;
+constexpr uint32_t kRaySkipTriangles = 0x100, kRaySkipAabbs = 0x200;
 constexpr uint32_t kInstanceCullDisable = 0x1, kInstanceFlipFacing = 0x2, kInstanceForceOpaque = 0x4,
                    kInstanceForceNoOpaque = 0x8;
 
@@ -31,6 +33,25 @@ void resetHit(QueryHit& h, float tMax) {
     std::memset(&h, 0, sizeof h);
     h.type = kCommittedNone;
     h.t = tMax;
+}
+
+// Opacity in the spec's order: the geometry's OPAQUE flag, overridden by the instance's FORCE_* flags,
+// overridden by the ray's Opaque / NoOpaque flags.
+inline bool resolveOpacity(bool geometryOpaque, uint32_t instanceFlags, uint32_t rayFlags) {
+    bool opaque = geometryOpaque;
+    if (instanceFlags & kInstanceForceOpaque)
+        opaque = true;
+    else if (instanceFlags & kInstanceForceNoOpaque)
+        opaque = false;
+    if (rayFlags & kRayOpaque)
+        opaque = true;
+    else if (rayFlags & kRayNoOpaque)
+        opaque = false;
+    return opaque;
+}
+
+inline bool culledByOpacity(bool opaque, uint32_t rayFlags) {
+    return opaque ? (rayFlags & kRayCullOpaque) != 0 : (rayFlags & kRayCullNoOpaque) != 0;
 }
 
 void push(RayQueryState& q, ChildRef ref, float dist) {
@@ -115,16 +136,19 @@ void transformRay(const InstanceRecord& inst, const float o[3], const float d[3]
 void enterInstance(RayQueryState& q, const InstanceRecord& inst) {
     const uint32_t mask = inst.customIndexAndMask >> 24;
     if ((mask & q.cullMask & 0xFFu) == 0) return;
-    if (q.flags & kRaySkipTriangles) return;  // bottom-level structures hold triangles only (for now)
     const std::byte* blas = q.resolver ? q.resolver(inst.reference) : nullptr;
     if (!blas) return;
     const Header* h = header(blas);
     if (h->magic != kMagic || h->type != uint32_t(StructureType::BottomLevel) || h->root == kEmptyRef) return;
+    // A bottom-level structure holds one primitive type, so the Skip flags cull whole instances.
+    const bool aabbs = h->primitiveType == VK_GEOMETRY_TYPE_AABBS_KHR;
+    if (q.flags & (aabbs ? kRaySkipAabbs : kRaySkipTriangles)) return;
     float oo[3], od[3];
     transformRay(inst, q.worldOrigin, q.worldDirection, oo, od);
     prepareShearedRay(q.objectRay, oo, od);
     q.instance = &inst;
     q.bottomLevel = blas;
+    q.bottomLevelAabbs = aabbs;
     q.inBottomLevel = true;
     q.topLevelStackBase = q.sp;
     q.bottomLeafNext = q.bottomLeafEnd = 0;
@@ -152,17 +176,8 @@ TriangleOutcome testTriangle(RayQueryState& q, const TriangleRecord& tri) {
         if ((q.flags & kRayCullBack) && !front) return TriangleOutcome::None;
         if ((q.flags & kRayCullFront) && front) return TriangleOutcome::None;
     }
-    bool opaque = (tri.flags & kTriangleOpaque) != 0;
-    if (instanceFlags & kInstanceForceOpaque)
-        opaque = true;
-    else if (instanceFlags & kInstanceForceNoOpaque)
-        opaque = false;
-    if (q.flags & kRayOpaque)
-        opaque = true;
-    else if (q.flags & kRayNoOpaque)
-        opaque = false;
-    if ((q.flags & kRayCullOpaque) && opaque) return TriangleOutcome::None;
-    if ((q.flags & kRayCullNoOpaque) && !opaque) return TriangleOutcome::None;
+    const bool opaque = resolveOpacity((tri.flags & kTriangleOpaque) != 0, instanceFlags, q.flags);
+    if (culledByOpacity(opaque, q.flags)) return TriangleOutcome::None;
 
     QueryHit& c = q.candidate;
     c.type = kCandidateTriangle;
@@ -173,6 +188,7 @@ TriangleOutcome testTriangle(RayQueryState& q, const TriangleRecord& tri) {
     c.aabbOpaque = false;
     c.instance = q.instance;
     c.triangle = &tri;
+    c.aabb = nullptr;
     std::memcpy(c.objectOrigin, q.objectRay.org, sizeof c.objectOrigin);
     std::memcpy(c.objectDirection, q.objectRay.dir, sizeof c.objectDirection);
     if (opaque) {
@@ -181,6 +197,47 @@ TriangleOutcome testTriangle(RayQueryState& q, const TriangleRecord& tri) {
     }
     q.candidatePending = true;
     return TriangleOutcome::Candidate;
+}
+
+// Tests the rest of the current triangle leaf. Returns true when a candidate needs the application.
+bool visitTriangleLeaf(RayQueryState& q) {
+    const TriangleRecord* records = triangles(q.bottomLevel);
+    while (q.bottomLeafNext < q.bottomLeafEnd) {
+        if (testTriangle(q, records[q.bottomLeafNext++]) == TriangleOutcome::Candidate) return true;
+        if (q.done) return false;  // an opaque hit with TerminateOnFirstHit
+    }
+    return false;
+}
+
+// Every AABB the ray meets goes back to the application, opaque or not: only it knows the shape inside.
+bool testAabb(RayQueryState& q, const AabbRecord& box) {
+    float tEnter;
+    if (!intersectAabb(q.objectRay.org, q.objectRay.dir, box.lower, box.upper, q.tMin, q.tMax, tEnter)) return false;
+    const uint32_t instanceFlags = q.instance->sbtOffsetAndFlags >> 24;
+    const bool opaque = resolveOpacity((box.flags & kAabbOpaque) != 0, instanceFlags, q.flags);
+    if (culledByOpacity(opaque, q.flags)) return false;
+
+    QueryHit& c = q.candidate;
+    c.type = kCandidateAabb;
+    c.t = tEnter;
+    c.barycentrics[0] = c.barycentrics[1] = 0.0f;
+    c.frontFace = false;
+    c.aabbOpaque = opaque;
+    c.instance = q.instance;
+    c.triangle = nullptr;
+    c.aabb = &box;
+    std::memcpy(c.objectOrigin, q.objectRay.org, sizeof c.objectOrigin);
+    std::memcpy(c.objectDirection, q.objectRay.dir, sizeof c.objectDirection);
+    q.candidatePending = true;
+    return true;
+}
+
+// Tests the rest of the current AABB leaf. Returns true at the first candidate.
+bool visitAabbLeaf(RayQueryState& q) {
+    const AabbRecord* records = aabbs(q.bottomLevel);
+    while (q.bottomLeafNext < q.bottomLeafEnd)
+        if (testAabb(q, records[q.bottomLeafNext++])) return true;
+    return false;
 }
 
 }  // namespace
@@ -204,6 +261,7 @@ void queryInitialize(RayQueryState& q, const std::byte* topLevel, BlasResolver r
     q.bottomLeafNext = q.bottomLeafEnd = 0;
     q.instance = nullptr;
     q.bottomLevel = nullptr;
+    q.bottomLevelAabbs = false;
     resetHit(q.candidate, tMax);
     resetHit(q.committed, tMax);
     prepareShearedRay(q.worldRay, origin, direction);
@@ -220,8 +278,7 @@ bool queryProceed(RayQueryState& q) {
     while (!q.done) {
         if (q.inBottomLevel) {
             if (q.bottomLeafNext < q.bottomLeafEnd) {
-                const TriangleRecord& tri = triangles(q.bottomLevel)[q.bottomLeafNext++];
-                if (testTriangle(q, tri) == TriangleOutcome::Candidate) return true;
+                if (q.bottomLevelAabbs ? visitAabbLeaf(q) : visitTriangleLeaf(q)) return true;
                 continue;
             }
             if (q.sp == q.topLevelStackBase) {

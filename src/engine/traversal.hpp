@@ -1,5 +1,5 @@
 // Ray traversal with the semantics of SPV_KHR_ray_query, as a resumable state machine: Proceed runs until it
-// meets a candidate the caller must decide on (a non-opaque triangle), or until traversal ends. The whole
+// meets a candidate the caller must decide on (a non-opaque triangle or any AABB), or until traversal ends. The whole
 // state, stacks included, lives in the caller's VkasRayQuery, so a query never allocates.
 #pragma once
 
@@ -17,15 +17,24 @@ constexpr uint32_t kCandidateTriangle = 0, kCandidateAabb = 1;
 
 struct QueryHit {
     uint32_t type;
-    float t;
+    float t;  // AABB candidates: where the ray enters the box (not less than tMin); the spec leaves it undefined
     float barycentrics[2];
     bool frontFace;
     bool aabbOpaque;
     const format::InstanceRecord* instance;  // null for no hit
-    const format::TriangleRecord* triangle;
+    const format::TriangleRecord* triangle;  // triangle candidates and hits
+    const format::AabbRecord* aabb;          // AABB candidates and generated hits
     float objectOrigin[3];
     float objectDirection[3];
 };
+
+// Geometry and primitive index of a hit, -1 without one.
+inline int32_t hitGeometryIndex(const QueryHit& h) {
+    return h.triangle ? int32_t(h.triangle->geometryIndex) : h.aabb ? int32_t(h.aabb->geometryIndex) : -1;
+}
+inline int32_t hitPrimitiveIndex(const QueryHit& h) {
+    return h.triangle ? int32_t(h.triangle->primitiveIndex) : h.aabb ? int32_t(h.aabb->primitiveIndex) : -1;
+}
 
 // Each wide level pushes at most 7 siblings; two levels (top and bottom) share the stack.
 constexpr uint32_t kStackCapacity = 2 * ((format::kNodeWidth - 1) * format::kMaxTreeDepth + 1);
@@ -49,6 +58,7 @@ struct RayQueryState {
     ShearedRay worldRay, objectRay;
     const format::InstanceRecord* instance;
     const std::byte* bottomLevel;
+    bool bottomLevelAabbs;  // the current bottom-level structure holds AABBs, not triangles
 
     QueryHit candidate, committed;
 
@@ -60,10 +70,13 @@ void queryInitialize(RayQueryState& q, const std::byte* topLevel, BlasResolver r
                      uint32_t cullMask, const float origin[3], float tMin, const float direction[3], float tMax);
 bool queryProceed(RayQueryState& q);
 void queryConfirm(RayQueryState& q);
+// Commits the pending AABB candidate at tHit. Does nothing without one, or when tHit is outside
+// [tMin, committed t] (VUID 06353: the API layer reports it).
 void queryGenerate(RayQueryState& q, float tHit);
 void queryTerminate(RayQueryState& q);
 
-// Runs a query to completion, confirming every non-opaque candidate (no any-hit shader).
+// Runs a query to completion, confirming every non-opaque triangle candidate (no any-hit shader). AABB
+// candidates are dropped (no intersection shader).
 void queryRunToCompletion(RayQueryState& q);
 
 }  // namespace vkas

@@ -11,7 +11,7 @@ namespace oracle {
 
 namespace {
 constexpr uint32_t kRayOpaque = 0x1, kRayNoOpaque = 0x2, kRayCullBack = 0x10, kRayCullFront = 0x20,
-                   kRayCullOpaque = 0x40, kRayCullNoOpaque = 0x80, kRaySkipTriangles = 0x100;
+                   kRayCullOpaque = 0x40, kRayCullNoOpaque = 0x80, kRaySkipTriangles = 0x100, kRaySkipAabbs = 0x200;
 constexpr uint32_t kInstCullDisable = 0x1, kInstFlip = 0x2, kInstForceOpaque = 0x4, kInstForceNoOpaque = 0x8;
 
 template <typename T>
@@ -148,15 +148,19 @@ Vec3 decodeVertex(VkFormat format, const void* vp, bool* xIsNaN) {
 void Blas::computeBounds() {
     lo = {1e300, 1e300, 1e300};
     hi = {-1e300, -1e300, -1e300};
-    for (const Geometry& g : geometries)
-        for (const Triangle& t : g.triangles) {
-            if (!t.active) continue;
-            for (const Vec3& v : t.v)
-                for (int k = 0; k < 3; ++k) {
-                    lo[k] = std::min(lo[k], v[k]);
-                    hi[k] = std::max(hi[k], v[k]);
-                }
+    auto extend = [&](const Vec3& v) {
+        for (int k = 0; k < 3; ++k) {
+            lo[k] = std::min(lo[k], v[k]);
+            hi[k] = std::max(hi[k], v[k]);
         }
+    };
+    for (const Geometry& g : geometries) {
+        for (const Triangle& t : g.triangles)
+            if (t.active)
+                for (const Vec3& v : t.v) extend(v);
+        for (const Aabb& b : g.aabbs)
+            if (b.valid()) extend(b.lo), extend(b.hi);
+    }
 }
 
 Geometry fetchTriangles(const VkAccelerationStructureGeometryKHR& geometry,
@@ -206,6 +210,34 @@ Geometry fetchTriangles(const VkAccelerationStructureGeometryKHR& geometry,
         }
     }
     return out;
+}
+
+Geometry fetchAabbs(const VkAccelerationStructureGeometryKHR& geometry,
+                    const VkAccelerationStructureBuildRangeInfoKHR& range) {
+    if (geometry.geometryType != VK_GEOMETRY_TYPE_AABBS_KHR)
+        throw std::invalid_argument("oracle: not an AABB geometry");
+    const VkAccelerationStructureGeometryAabbsDataKHR& data = geometry.geometry.aabbs;
+    Geometry out;
+    out.type = VK_GEOMETRY_TYPE_AABBS_KHR;
+    out.opaque = (geometry.flags & VK_GEOMETRY_OPAQUE_BIT_KHR) != 0;
+    const uint8_t* base = static_cast<const uint8_t*>(data.data.hostAddress) + range.primitiveOffset;
+    out.aabbs.resize(range.primitiveCount);
+    for (uint64_t i = 0; i < range.primitiveCount; ++i) {
+        const uint8_t* p = base + data.stride * i;  // VkAabbPositionsKHR: minX, minY, minZ, maxX, maxY, maxZ
+        Aabb& b = out.aabbs[i];
+        for (int k = 0; k < 3; ++k) {
+            b.lo[k] = double(load<float>(p + 4 * k));
+            b.hi[k] = double(load<float>(p + 12 + 4 * k));
+        }
+        b.active = !std::isnan(b.lo[0]);
+    }
+    return out;
+}
+
+Geometry fetchGeometry(const VkAccelerationStructureGeometryKHR& geometry,
+                       const VkAccelerationStructureBuildRangeInfoKHR& range) {
+    return geometry.geometryType == VK_GEOMETRY_TYPE_AABBS_KHR ? fetchAabbs(geometry, range)
+                                                                : fetchTriangles(geometry, range);
 }
 
 void invert34(const double m[3][4], double out[3][4]) {
@@ -264,6 +296,31 @@ size_t Result::requiredCount() const {
     return n;
 }
 
+Result Result::withoutAabbs() const {
+    Result r;
+    for (const Candidate& c : candidates)
+        if (!c.aabb) r.candidates.push_back(c);
+    return r;
+}
+
+bool boxInterval(const Vec3& o, const Vec3& d, const Vec3& lo, const Vec3& hi, double& t0, double& t1) {
+    t0 = -std::numeric_limits<double>::infinity();
+    t1 = std::numeric_limits<double>::infinity();
+    for (int k = 0; k < 3; ++k) {
+        if (!(lo[k] <= hi[k]) || (d[k] == 0 && (o[k] < lo[k] || o[k] > hi[k]))) {
+            t0 = std::numeric_limits<double>::infinity();
+            t1 = -t0;
+            return false;
+        }
+        if (d[k] == 0) continue;
+        double a = (lo[k] - o[k]) / d[k], b = (hi[k] - o[k]) / d[k];
+        if (a > b) std::swap(a, b);
+        t0 = std::max(t0, a);
+        t1 = std::min(t1, b);
+    }
+    return t0 <= t1;
+}
+
 namespace {
 // Slab test against a box grown by a generous margin; only used to skip instances that cannot be hit.
 bool mayHitBox(const Vec3& o, const Vec3& d, Vec3 lo, Vec3 hi, double tMin, double tMax) {
@@ -292,7 +349,6 @@ bool mayHitBox(const Vec3& o, const Vec3& d, Vec3 lo, Vec3 hi, double tMin, doub
 
 Result trace(const Scene& scene, const Ray& ray, uint32_t rayFlags, uint32_t cullMask) {
     Result result;
-    if (rayFlags & kRaySkipTriangles) return result;
     const uint32_t mask = cullMask & 0xFFu;
     const Vec3 ow{ray.origin[0], ray.origin[1], ray.origin[2]};
     const Vec3 dw{ray.direction[0], ray.direction[1], ray.direction[2]};
@@ -325,6 +381,57 @@ Result trace(const Scene& scene, const Ray& ray, uint32_t rayFlags, uint32_t cul
             if ((rayFlags & kRayCullOpaque) && opaque) continue;
             if ((rayFlags & kRayCullNoOpaque) && !opaque) continue;
 
+            if (geom.type == VK_GEOMETRY_TYPE_AABBS_KHR) {
+                if (rayFlags & kRaySkipAabbs) continue;
+                // The implementation tests its own float object ray: origin and direction are off by the rounding
+                // of the world-to-object transform, and the ray points by that much times t. Within delta of the
+                // box surface a candidate is optional.
+                const double cond = maxAbs(d) > 0 ? std::max(1.0, minv * maxAbs(dw) / maxAbs(d)) : 1.0;
+                for (size_t pi = 0; pi < geom.aabbs.size(); ++pi) {
+                    const Aabb& box = geom.aabbs[pi];
+                    if (!box.valid()) continue;  // inactive or inverted: never hit
+                    double boxScale = 0;
+                    for (int k = 0; k < 3; ++k)
+                        for (double v : {box.lo[k], box.hi[k]})
+                            if (std::isfinite(v)) boxScale = std::max(boxScale, std::fabs(v));
+                    const double delta = kRel * std::max({originScale, boxScale, 1e-30}) * cond;
+                    Vec3 glo, ghi, slo, shi;
+                    for (int k = 0; k < 3; ++k) {
+                        glo[k] = box.lo[k] - delta, ghi[k] = box.hi[k] + delta;
+                        slo[k] = box.lo[k] + delta, shi[k] = box.hi[k] - delta;
+                    }
+                    double e0, e1, g0, g1, s0, s1;
+                    const bool exact = boxInterval(o, d, box.lo, box.hi, e0, e1) &&
+                                       std::max(e0, tMin) <= std::min(e1, tMax);
+                    const bool grown = boxInterval(o, d, glo, ghi, g0, g1) && std::max(g0, tMin) <= std::min(g1, tMax);
+                    const bool shrunk = boxInterval(o, d, slo, shi, s0, s1) && std::max(s0, tMin) <= std::min(s1, tMax);
+                    if (!grown) continue;
+                    Candidate c;
+                    c.aabb = true;
+                    c.t = exact ? std::max(e0, tMin) : std::max(g0, tMin);
+                    c.tExit = exact ? std::min(e1, tMax) : std::min(g1, tMax);
+                    // How far the entry moves when the box grows or shrinks by delta; without an exact hit, the
+                    // whole grown interval.
+                    c.tTolerance = exact ? std::fabs(std::max(g0, tMin) - c.t) : c.tExit - c.t;
+                    if (shrunk) c.tTolerance = std::max(c.tTolerance, std::fabs(std::max(s0, tMin) - c.t));
+                    c.instanceId = int32_t(id);
+                    c.geometryIndex = int32_t(gi);
+                    c.primitiveIndex = int32_t(pi);
+                    c.customIndex = inst.customIndex;
+                    c.sbtOffset = inst.sbtOffset;
+                    c.facingAmbiguous = true;  // AABBs have no facing
+                    c.opaque = opaque;
+                    c.optional = !shrunk;
+                    c.baryTolerance = std::numeric_limits<double>::infinity();  // no barycentrics
+                    for (int k = 0; k < 3; ++k) {
+                        c.objectOrigin[k] = o[k];
+                        c.objectDirection[k] = d[k];
+                    }
+                    result.candidates.push_back(c);
+                }
+                continue;
+            }
+            if (rayFlags & kRaySkipTriangles) continue;
             for (size_t pi = 0; pi < geom.triangles.size(); ++pi) {
                 const Triangle& tri = geom.triangles[pi];
                 if (!tri.active) continue;

@@ -41,19 +41,34 @@ struct Triangle {
     std::array<Vec3, 3> v;  // object space, after the geometry transform, rounded to float
     bool active = true;
 };
+// A VkAabbPositionsKHR as given. Inactive when minX is NaN; a box with min > max on an axis (invalid input,
+// VUIDs 03546-03548) is never hit.
+struct Aabb {
+    Vec3 lo{0, 0, 0}, hi{0, 0, 0};
+    bool active = true;
+    bool valid() const { return active && lo[0] <= hi[0] && lo[1] <= hi[1] && lo[2] <= hi[2]; }
+};
 struct Geometry {
+    VkGeometryTypeKHR type = VK_GEOMETRY_TYPE_TRIANGLES_KHR;
     bool opaque = false;
-    std::vector<Triangle> triangles;  // index = primitive index
+    std::vector<Triangle> triangles;  // triangle geometries; index = primitive index
+    std::vector<Aabb> aabbs;          // AABB geometries; index = primitive index
 };
 struct Blas {
     std::vector<Geometry> geometries;  // index = geometry index
-    Vec3 lo{0, 0, 0}, hi{-1, -1, -1};  // bounds of active triangles (lo > hi: empty)
+    Vec3 lo{0, 0, 0}, hi{-1, -1, -1};  // bounds of active triangles and valid AABBs (lo > hi: empty)
     void computeBounds();
 };
 
 // Fetches the triangles of one geometry exactly as the spec's fetch rules say (spec digest section 4).
 Geometry fetchTriangles(const VkAccelerationStructureGeometryKHR& geometry,
                         const VkAccelerationStructureBuildRangeInfoKHR& range);
+// Fetches the AABBs of one geometry: AABB i at data + primitiveOffset + i * stride.
+Geometry fetchAabbs(const VkAccelerationStructureGeometryKHR& geometry,
+                    const VkAccelerationStructureBuildRangeInfoKHR& range);
+// Either of the two, by geometryType.
+Geometry fetchGeometry(const VkAccelerationStructureGeometryKHR& geometry,
+                       const VkAccelerationStructureBuildRangeInfoKHR& range);
 
 // ---- Instances --------------------------------------------------------------------------------------------------
 struct Instance {
@@ -80,6 +95,7 @@ struct Ray {
 };
 
 struct Candidate {
+    bool aabb = false;  // an AABB candidate: t is where the ray enters the box, clamped to tMin
     double t = 0;
     double bary[2] = {0, 0};  // weights of vertex 1 and vertex 2
     int32_t instanceId = -1, geometryIndex = -1, primitiveIndex = -1;
@@ -91,17 +107,26 @@ struct Candidate {
     // implementation may report it or not. Required candidates must be found.
     bool optional = false;
     double tTolerance = 0;     // absolute tolerance for comparing t
+    double tExit = 0;          // AABB candidates: where the ray leaves the box, clamped to tMax
     double baryTolerance = 0;  // absolute tolerance for comparing barycentrics
     double objectOrigin[3] = {0, 0, 0}, objectDirection[3] = {0, 0, 0};
 };
 
 struct Result {
     // Every candidate that survives all culling (mask, skip, facing, opacity culling), required or optional.
+    // AABB candidates (aabb = true) are required when the ray passes through the box shrunk by the tolerance
+    // margin within [tMin, tMax], optional when it only meets the box grown by it.
     std::vector<Candidate> candidates;
     const Candidate* find(int32_t instanceId, int32_t geometryIndex, int32_t primitiveIndex) const;
     const Candidate* closestRequired() const;
     size_t requiredCount() const;
+    // The same result without AABB candidates: what a trace without an intersection shader can hit.
+    Result withoutAabbs() const;
 };
+
+// The parameters [t0, t1] where the line o + t d is inside the closed box [lo, hi], in double; false (and t0 > t1)
+// when it never is. A zero direction component keeps the slab only if o is inside it.
+bool boxInterval(const Vec3& o, const Vec3& d, const Vec3& lo, const Vec3& hi, double& t0, double& t1);
 
 // rayFlags are the SPIR-V RayFlags bits; only the low 8 bits of cullMask are used.
 Result trace(const Scene& scene, const Ray& ray, uint32_t rayFlags, uint32_t cullMask);

@@ -159,6 +159,7 @@ struct Hit {
     uint32_t sbtOffset = 0;
     float bary[2] = {0, 0};
     bool frontFace = false;
+    bool aabbOpaque = false;  // AABB candidates: CandidateAABBOpaque
     std::string str() const;
 };
 Hit readHit(const VkasRayQuery& q, bool committed);
@@ -172,6 +173,8 @@ struct QueryTrace {
     std::string problems;         // invariant violations seen during the loop (empty: none)
 };
 
+// All: confirm every triangle candidate and generate every AABB candidate where the ray enters the box (as an
+// intersection shader for the box itself would). None: neither.
 enum class Confirm { All, None };
 
 // Comparison against the oracle (see tests/README in CMakeLists comments): both miss; or vkas's primitive is an
@@ -225,20 +228,23 @@ class VkasTest : public ::testing::Test {
     // One identity instance of the BLAS.
     AccelStruct* buildSingleInstanceTlas(const AccelStruct* blas, const BuildOptions& opt = {});
 
-    // Runs a ray query to completion. Every candidate is confirmed (Confirm::All) or none is. Checks the
-    // candidate invariants (candidate type TRIANGLE, t within (tMin, current tMax], committed NONE before any
-    // confirmation) and records them in QueryTrace::problems.
+    // Runs a ray query to completion. Every candidate is confirmed or generated (Confirm::All) or none is. Checks
+    // the candidate invariants (triangles: t within (tMin, current tMax]; AABBs: t within [tMin, current tMax],
+    // each primitive at most once per instance, a box of `scene`; committed NONE before any confirmation; the
+    // committed values after a confirm or generate) and records violations in QueryTrace::problems. AABB
+    // candidates need `scene` (the boxes) to be generated; without it they are reported as problems.
     QueryTrace query(VkAccelerationStructureKHR tlas, const oracle::Ray& ray, uint32_t flags, uint32_t cullMask,
-                     Confirm confirm = Confirm::All);
+                     Confirm confirm = Confirm::All, const oracle::Scene* scene = nullptr);
     Hit traceClosest(const AccelStruct* tlas, const oracle::Ray& ray, uint32_t flags = 0, uint32_t cullMask = 0xFF);
 
-    // Random rays around a scene: aimed at random triangles, at random points of the bounds, from inside, with
-    // random direction lengths and sometimes a random [tMin, tMax] window.
+    // Random rays around a scene: aimed at random triangles or boxes, at random points of the bounds, from inside,
+    // with random direction lengths and sometimes a random [tMin, tMax] window.
     std::vector<oracle::Ray> randomRays(const oracle::Scene& scene, size_t count);
-    // Rays from random directions (both sides) at a random interior point of each active triangle of each active
-    // instance, at most maxRays (triangles chosen at random when there are more).
+    // Rays from random directions (both sides) at a random interior point of each active triangle and valid AABB of
+    // each active instance, at most maxRays (primitives chosen at random when there are more).
     std::vector<oracle::Ray> targetedRays(const oracle::Scene& scene, size_t maxRays);
-    // Checks query(), vkasTraceRays closest and any-hit against the oracle for each ray. Returns the number of hits.
+    // Checks query(), vkasTraceRays closest and any-hit against the oracle for each ray (AABB candidates generated at
+    // their entry point by the query; never hit by vkasTraceRays). Returns the number of query hits.
     size_t checkRays(const AccelStruct* tlas, const std::vector<oracle::Ray>& rays, uint32_t flags = 0,
                      uint32_t cullMask = 0xFF, bool alsoBatch = true);
 
