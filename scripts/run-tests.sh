@@ -2,6 +2,7 @@
 # The README's second command (and CI's, through .ci/run): installs the build dependencies, then
 #   1. builds RelWithDebInfo in build/ and runs the test suite (ctest) and a smoke run of the vkas tool;
 #   2. builds with AddressSanitizer + UndefinedBehaviorSanitizer in build-asan/ and runs the same there;
+#   (between the two: installs Mesa's lavapipe from bookworm-backports for the differential-conformance tests)
 #   3. installs build/ into a temporary prefix and builds the C package consumer against it
 #      (find_package(vkas) and pkg-config vkas).
 # Every step runs even when an earlier one failed (except what needs a failed build); the last line is a
@@ -60,6 +61,17 @@ banner "dependencies"
 if ! "$root/scripts/setup-deps.sh"; then
   echo "run-tests: FAILED: could not install the build dependencies"
   exit 1
+fi
+
+banner "lavapipe (the differential-conformance referee)"
+# The differential tests skip, loudly, only when lavapipe cannot be installed; once it is, they must run.
+if icd=$("$root/scripts/setup-lavapipe.sh" | tail -n 1) && [[ -f $icd ]]; then
+  export VKAS_REQUIRE_LAVAPIPE=1
+  record "lavapipe" 0 "$icd"
+else
+  export VKAS_REQUIRE_LAVAPIPE=0
+  echo "run-tests: WARNING: lavapipe could not be installed; the differential-conformance tests will be SKIPPED"
+  results+=("lavapipe UNAVAILABLE (differential tests skipped)")
 fi
 
 banner "build/ (RelWithDebInfo)"

@@ -3,7 +3,8 @@
 # Usage: scripts/setup-deps.sh [extra-package ...]
 set -euo pipefail
 
-packages=(build-essential cmake pkg-config libvulkan-dev libgtest-dev libgmock-dev libcli11-dev libpng-dev "$@")
+packages=(build-essential cmake pkg-config libvulkan-dev libgtest-dev libgmock-dev libcli11-dev libpng-dev
+          glslang-tools "$@")
 
 missing=()
 for p in "${packages[@]}"; do
