@@ -80,6 +80,12 @@ if cmake -S . -B build -DCMAKE_BUILD_TYPE=RelWithDebInfo -DVKAS_BUILD_TESTS=ON -
   record "build" 0
   banner "ctest in build/"
   ctest_in build tests
+  # With lavapipe installed, the differential-conformance tests must have been built and run.
+  conformance=$(ctest --test-dir build -N -L conformance 2>/dev/null | grep -Eo 'Total Tests: [0-9]+' | grep -Eo '[0-9]+')
+  if [[ $VKAS_REQUIRE_LAVAPIPE == 1 ]]; then
+    [[ ${conformance:-0} -gt 0 ]]
+    record "conformance" $? "${conformance:-0} differential-conformance tests (label conformance) in the run above"
+  fi
   tool_smoke build tool
 else
   record "build" 1

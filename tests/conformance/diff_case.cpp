@@ -1,8 +1,43 @@
 #include "diff_case.h"
 
 #include <cstring>
+#include <stdexcept>
 
 namespace diff {
+
+VkAccelerationStructureGeometryKHR vulkanGeometry(const Geometry& g, uint64_t blob) {
+    VkAccelerationStructureGeometryKHR geom{VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_GEOMETRY_KHR};
+    geom.geometryType = g.type;
+    geom.flags = g.flags;
+    if (g.type == VK_GEOMETRY_TYPE_TRIANGLES_KHR) {
+        auto& t = geom.geometry.triangles;
+        t.sType = VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_GEOMETRY_TRIANGLES_DATA_KHR;
+        t.vertexFormat = g.triangles.vertexFormat;
+        t.vertexData.deviceAddress = blob + g.triangles.vertexOffset;
+        t.vertexStride = g.triangles.vertexStride;
+        t.maxVertex = g.triangles.maxVertex;
+        t.indexType = g.triangles.indexType;
+        if (g.triangles.indexType != VK_INDEX_TYPE_NONE_KHR) t.indexData.deviceAddress = blob + g.triangles.indexOffset;
+        if (g.triangles.hasTransform) t.transformData.deviceAddress = blob + g.triangles.transformOffset;
+    } else if (g.type == VK_GEOMETRY_TYPE_AABBS_KHR) {
+        auto& a = geom.geometry.aabbs;
+        a.sType = VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_GEOMETRY_AABBS_DATA_KHR;
+        a.data.deviceAddress = blob + g.aabbs.dataOffset;
+        a.stride = g.aabbs.stride;
+    } else {
+        throw std::invalid_argument("a BLAS geometry is neither triangles nor AABBs");
+    }
+    return geom;
+}
+
+void packInstance(const Instance& in, uint64_t reference, uint8_t out[64]) {
+    const uint32_t customIndexAndMask = (in.customIndex & 0xFF'FFFFu) | ((in.mask & 0xFFu) << 24);
+    const uint32_t sbtOffsetAndFlags = (in.sbtOffset & 0xFF'FFFFu) | ((in.flags & 0xFFu) << 24);
+    std::memcpy(out, &in.transform, 48);
+    std::memcpy(out + 48, &customIndexAndMask, 4);
+    std::memcpy(out + 52, &sbtOffsetAndFlags, 4);
+    std::memcpy(out + 56, &reference, 8);
+}
 
 ProceduralTables makeProceduralTables(const Scene& scene) {
     ProceduralTables t;

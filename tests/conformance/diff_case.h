@@ -61,6 +61,14 @@ struct Scene {
     std::string name;  // what the generator made, for messages
 };
 
+// The Vulkan description of a geometry whose blob starts at `blobAddress` (a device address, or a host address
+// stored in the same union). Throws std::invalid_argument for a type other than triangles or AABBs.
+VkAccelerationStructureGeometryKHR vulkanGeometry(const Geometry& geometry, uint64_t blobAddress);
+
+// Writes the 64-byte VkAccelerationStructureInstanceKHR field by field: the C bit-fields of the header have an
+// implementation-defined layout, the spec's is low bits first.
+void packInstance(const Instance& instance, uint64_t reference, uint8_t out[64]);
+
 // ---- Rays -------------------------------------------------------------------------------------------------------
 // What the ray program (below) does with each ray.
 enum Mode : uint32_t {

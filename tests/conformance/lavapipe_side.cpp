@@ -405,42 +405,6 @@ struct RunObjects {
     }
 };
 
-// A 64-byte VkAccelerationStructureInstanceKHR, written field by field: the C bit-fields of the header have an
-// implementation-defined layout, the spec's is low bits first.
-void writeInstance(uint8_t* dst, const Instance& in, VkDeviceAddress reference) {
-    const uint32_t customIndexAndMask = (in.customIndex & 0xFF'FFFFu) | ((in.mask & 0xFFu) << 24);
-    const uint32_t sbtOffsetAndFlags = (in.sbtOffset & 0xFF'FFFFu) | ((in.flags & 0xFFu) << 24);
-    std::memcpy(dst, &in.transform, 48);
-    std::memcpy(dst + 48, &customIndexAndMask, 4);
-    std::memcpy(dst + 52, &sbtOffsetAndFlags, 4);
-    std::memcpy(dst + 56, &reference, 8);
-}
-
-VkAccelerationStructureGeometryKHR blasGeometry(const Geometry& g, VkDeviceAddress blob) {
-    VkAccelerationStructureGeometryKHR geom{VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_GEOMETRY_KHR};
-    geom.geometryType = g.type;
-    geom.flags = g.flags;
-    if (g.type == VK_GEOMETRY_TYPE_TRIANGLES_KHR) {
-        auto& t = geom.geometry.triangles;
-        t.sType = VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_GEOMETRY_TRIANGLES_DATA_KHR;
-        t.vertexFormat = g.triangles.vertexFormat;
-        t.vertexData.deviceAddress = blob + g.triangles.vertexOffset;
-        t.vertexStride = g.triangles.vertexStride;
-        t.maxVertex = g.triangles.maxVertex;
-        t.indexType = g.triangles.indexType;
-        if (g.triangles.indexType != VK_INDEX_TYPE_NONE_KHR) t.indexData.deviceAddress = blob + g.triangles.indexOffset;
-        if (g.triangles.hasTransform) t.transformData.deviceAddress = blob + g.triangles.transformOffset;
-    } else if (g.type == VK_GEOMETRY_TYPE_AABBS_KHR) {
-        auto& a = geom.geometry.aabbs;
-        a.sType = VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_GEOMETRY_AABBS_DATA_KHR;
-        a.data.deviceAddress = blob + g.aabbs.dataOffset;
-        a.stride = g.aabbs.stride;
-    } else {
-        throw std::runtime_error("lavapipe: a BLAS geometry is neither triangles nor AABBs");
-    }
-    return geom;
-}
-
 void barrier(VkCommandBuffer cmd, VkPipelineStageFlags src, VkAccessFlags srcAccess, VkPipelineStageFlags dst,
              VkAccessFlags dstAccess) {
     VkMemoryBarrier mb{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
@@ -549,7 +513,7 @@ std::vector<Result> LavapipeSide::run(const Scene& scene, const std::vector<Ray>
     for (size_t b = 0; b < blasCount; ++b) {
         const Blas& blas = scene.blases[b];
         for (const Geometry& g : blas.geometries) {
-            blasGeometries[b].push_back(blasGeometry(g, blob));
+            blasGeometries[b].push_back(vulkanGeometry(g, blob));
             blasRanges[b].push_back(g.range);
             if (impl_->workarounds.foldFirstVertex && g.type == VK_GEOMETRY_TYPE_TRIANGLES_KHR &&
                 g.range.firstVertex != 0) {
@@ -583,7 +547,7 @@ std::vector<Result> LavapipeSide::run(const Scene& scene, const std::vector<Ray>
         if (in.blas >= int32_t(blasCount))
             throw std::runtime_error("lavapipe: instance " + std::to_string(i) + " refers to BLAS " +
                                      std::to_string(in.blas) + " of " + std::to_string(blasCount));
-        writeInstance(instanceBuffer.mapped + 64 * i, in, in.blas < 0 ? 0 : blasAddresses[size_t(in.blas)]);
+        packInstance(in, in.blas < 0 ? 0 : blasAddresses[size_t(in.blas)], instanceBuffer.mapped + 64 * i);
     }
     VkAccelerationStructureGeometryKHR tlasGeometry{VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_GEOMETRY_KHR};
     tlasGeometry.geometryType = VK_GEOMETRY_TYPE_INSTANCES_KHR;

@@ -2,6 +2,7 @@
 
 #include <vkas/vkas.h>
 #include <vkas/vkas_compat.h>
+#include <vkas_test.h>
 
 #include <algorithm>
 #include <cmath>
@@ -12,25 +13,6 @@
 namespace diff {
 
 namespace {
-
-#define DIFF_COMMANDS(X)                          \
-    X(vkCreateBuffer)                             \
-    X(vkDestroyBuffer)                            \
-    X(vkGetBufferMemoryRequirements)              \
-    X(vkAllocateMemory)                           \
-    X(vkFreeMemory)                               \
-    X(vkBindBufferMemory)                         \
-    X(vkMapMemory)                                \
-    X(vkGetAccelerationStructureBuildSizesKHR)    \
-    X(vkCreateAccelerationStructureKHR)           \
-    X(vkDestroyAccelerationStructureKHR)          \
-    X(vkBuildAccelerationStructuresKHR)
-
-struct Commands {
-#define DIFF_DECLARE(name) PFN_##name name = nullptr;
-    DIFF_COMMANDS(DIFF_DECLARE)
-#undef DIFF_DECLARE
-};
 
 void check(VkResult r, const char* what) {
     if (r != VK_SUCCESS) throw std::runtime_error(std::string("vkas: ") + what + " returned " + std::to_string(r));
@@ -47,7 +29,7 @@ struct HostAllocation {
 
 struct VkasSide::Impl {
     VkDevice device = VK_NULL_HANDLE;
-    Commands vk;
+    vt::Commands vk;  // the commands the test support loads (VT_DEVICE_COMMANDS)
     std::mutex messagesMutex;
     std::string messages;
 
@@ -138,14 +120,12 @@ std::unique_ptr<VkasSide> VkasSide::create(std::string* why) {
         vkasDestroyDevice(impl->device);                                                                     \
         return nullptr;                                                                                      \
     }
-    DIFF_COMMANDS(DIFF_LOAD)
+    VT_DEVICE_COMMANDS(DIFF_LOAD)
 #undef DIFF_LOAD
     return std::unique_ptr<VkasSide>(new VkasSide(std::move(impl)));
 }
 
 namespace {
-
-uint64_t address(const uint8_t* base, uint64_t offset) { return uint64_t(reinterpret_cast<uintptr_t>(base + offset)); }
 
 // The ray program of diff_case.h, on one ray.
 Result runProgram(VkAccelerationStructureKHR tlas, const Ray& ray, const ProceduralTables& tables) {
@@ -233,28 +213,7 @@ std::vector<Result> VkasSide::run(const Scene& scene, const std::vector<Ray>& ra
             std::vector<VkAccelerationStructureGeometryKHR> geometries;
             std::vector<VkAccelerationStructureBuildRangeInfoKHR> ranges;
             for (const Geometry& g : b.geometries) {
-                VkAccelerationStructureGeometryKHR geom{VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_GEOMETRY_KHR};
-                geom.geometryType = g.type;
-                geom.flags = g.flags;
-                if (g.type == VK_GEOMETRY_TYPE_TRIANGLES_KHR) {
-                    auto& t = geom.geometry.triangles;
-                    t.sType = VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_GEOMETRY_TRIANGLES_DATA_KHR;
-                    t.vertexFormat = g.triangles.vertexFormat;
-                    t.vertexData.deviceAddress = address(blob, g.triangles.vertexOffset);
-                    t.vertexStride = g.triangles.vertexStride;
-                    t.maxVertex = g.triangles.maxVertex;
-                    t.indexType = g.triangles.indexType;
-                    if (g.triangles.indexType != VK_INDEX_TYPE_NONE_KHR)
-                        t.indexData.deviceAddress = address(blob, g.triangles.indexOffset);
-                    if (g.triangles.hasTransform)
-                        t.transformData.deviceAddress = address(blob, g.triangles.transformOffset);
-                } else {
-                    auto& a = geom.geometry.aabbs;
-                    a.sType = VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_GEOMETRY_AABBS_DATA_KHR;
-                    a.data.deviceAddress = address(blob, g.aabbs.dataOffset);
-                    a.stride = g.aabbs.stride;
-                }
-                geometries.push_back(geom);
+                geometries.push_back(vulkanGeometry(g, uint64_t(reinterpret_cast<uintptr_t>(blob))));
                 ranges.push_back(g.range);
             }
             VkAccelerationStructureBuildGeometryInfoKHR info{
@@ -269,14 +228,7 @@ std::vector<Result> VkasSide::run(const Scene& scene, const std::vector<Ray>& ra
         std::vector<uint8_t> instances(std::max<size_t>(64, 64 * scene.instances.size()), 0xAA);
         for (size_t i = 0; i < scene.instances.size(); ++i) {
             const Instance& in = scene.instances[i];
-            uint8_t* p = instances.data() + 64 * i;
-            std::memcpy(p, &in.transform, 48);
-            const uint32_t w0 = (in.customIndex & 0xFF'FFFFu) | (in.mask << 24);
-            const uint32_t w1 = (in.sbtOffset & 0xFF'FFFFu) | (in.flags << 24);
-            const uint64_t ref = in.blas < 0 ? 0 : uint64_t(blases[size_t(in.blas)]);
-            std::memcpy(p + 48, &w0, 4);
-            std::memcpy(p + 52, &w1, 4);
-            std::memcpy(p + 56, &ref, 8);
+            packInstance(in, in.blas < 0 ? 0 : uint64_t(blases[size_t(in.blas)]), instances.data() + 64 * i);
         }
         VkAccelerationStructureGeometryKHR geom{VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_GEOMETRY_KHR};
         geom.geometryType = VK_GEOMETRY_TYPE_INSTANCES_KHR;
