@@ -4,6 +4,7 @@
 // oracle where that stays affordable.
 #include <chrono>
 #include <cmath>
+#include <cstddef>
 #include <cstring>
 #include <iostream>
 
@@ -179,4 +180,22 @@ TEST_F(build_large, level_primitives_2pow20) {
         EXPECT_NEAR(h.bary[1], gt.b2, 1e-3f);
         if (HasFailure()) return;
     }
+}
+
+// The provisional name of the range structure (<vkas/vkas_compat.h>): an application written against it passes its
+// ranges unchanged, and the final rules apply: with transformData NULL, transformOffset is ignored and no transform
+// is read, although the provisional wording said one is always consumed.
+class build_provisional : public VkasTest {};
+
+TEST_F(build_provisional, offset_info_name) {
+    static_assert(sizeof(VkAccelerationStructureBuildOffsetInfoKHR) == 16);
+    static_assert(offsetof(VkAccelerationStructureBuildOffsetInfoKHR, transformOffset) == 12);
+    auto g = makeGeometry(grid(8, 8), VK_INDEX_TYPE_UINT16, VK_GEOMETRY_OPAQUE_BIT_KHR);
+    VkAccelerationStructureBuildOffsetInfoKHR offsetInfo{};
+    offsetInfo.primitiveCount = g->range.primitiveCount;
+    offsetInfo.transformOffset = 48;  // no transformData: ignored
+    const std::vector<VkAccelerationStructureBuildOffsetInfoKHR> offsetInfos{offsetInfo};
+    AccelStruct* blas = buildBlas({g->geometry}, offsetInfos);
+    AccelStruct* tlas = buildSingleInstanceTlas(blas);
+    EXPECT_GT(checkRays(tlas, randomRays(*tlas->scene, 300)), 0u);
 }

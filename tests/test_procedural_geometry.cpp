@@ -4,6 +4,8 @@
 // and its rule 06353, inactive (minX NaN) boxes among active ones, opacity, culling and Skip flags, termination,
 // mixed top-level structures, vkasTraceRays (no intersection shader: AABBs never hit) and the build's valid usage
 // for AABBs. Random scenes are checked against the brute-force oracle; every test prints its seed.
+#include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -1210,4 +1212,79 @@ TEST_F(procedural_geometry, inverted_boxes_without_validation) {
     while (vkasRayQueryProceed(&q)) prims.push_back(vkasRayQueryGetIntersectionPrimitiveIndex(&q, VK_FALSE));
     EXPECT_EQ(prims, std::vector<int32_t>{2}) << "only the valid box is a candidate";
     vkasDestroyDevice(dev);
+}
+
+// ---- vkasTraceRaysProcedural: the intersection step as a callback ----------------------------------------------
+namespace {
+struct ProceduralContext {
+    const oracle::Scene* scene;
+    std::atomic<uint64_t> calls{0};
+};
+
+// What an intersection shader for the box itself computes (as the fixture's query() does): the entry point of the
+// object-space ray, clamped to tMin.
+VkBool32 VKAPI_PTR intersectBox(void* user, const VkasAabbCandidate* c, float* tHit) {
+    auto* ctx = static_cast<ProceduralContext*>(user);
+    ++ctx->calls;
+    const oracle::Aabb& box = ctx->scene->instances.at(size_t(c->instanceId))
+                                  .blas->geometries.at(size_t(c->geometryIndex))
+                                  .aabbs.at(size_t(c->primitiveIndex));
+    double t0, t1;
+    const oracle::Vec3 o{c->objectRayOrigin[0], c->objectRayOrigin[1], c->objectRayOrigin[2]};
+    const oracle::Vec3 d{c->objectRayDirection[0], c->objectRayDirection[1], c->objectRayDirection[2]};
+    if (!oracle::boxInterval(o, d, box.lo, box.hi, t0, t1)) return VK_FALSE;
+    const double entry = std::max(t0, double(c->tMin));
+    if (!(entry <= double(c->tMax)) || t1 < double(c->tMin)) return VK_FALSE;
+    *tHit = float(entry);
+    return VK_TRUE;
+}
+}  // namespace
+
+TEST_P(procedural_geometry_mixed, batch_procedural_matches_ray_queries) {
+    const uint32_t flags = GetParam() & ~uint32_t(VKAS_RAY_FLAG_TERMINATE_ON_FIRST_HIT);
+    AccelStruct* tlas = mixedScene();
+    auto rays = randomRays(*tlas->scene, 400);
+    const auto t = targetedRays(*tlas->scene, 400);
+    rays.insert(rays.end(), t.begin(), t.end());
+    std::vector<VkasRay> batch;
+    for (const auto& r : rays) batch.push_back({{r.origin[0], r.origin[1], r.origin[2]}, r.tMin,
+                                                {r.direction[0], r.direction[1], r.direction[2]}, r.tMax});
+    for (VkasTraceMode mode : {VKAS_TRACE_MODE_CLOSEST_HIT, VKAS_TRACE_MODE_ANY_HIT}) {
+        ProceduralContext ctx{tlas->scene.get()};
+        std::vector<VkasHit> out(batch.size());
+        ASSERT_EQ(vkasTraceRaysProcedural(device, tlas->handle, mode, flags, 0xFF, uint32_t(batch.size()), batch.data(),
+                                          out.data(), intersectBox, &ctx),
+                  VK_SUCCESS);
+        const uint32_t queryFlags = flags | (mode == VKAS_TRACE_MODE_ANY_HIT ? VKAS_RAY_FLAG_TERMINATE_ON_FIRST_HIT : 0u);
+        size_t generated = 0;
+        for (size_t i = 0; i < rays.size(); ++i) {
+            // The ray query with the same step, checked against the oracle by checkRays in random_scene.
+            const QueryTrace tr = query(tlas->handle, rays[i], queryFlags, 0xFF, Confirm::All, tlas->scene.get());
+            ASSERT_EQ(tr.problems, "") << describe(rays[i]);
+            const Hit got = fromBatch(out[i]);
+            ASSERT_TRUE(identical(got, tr.committed))
+                << "mode " << mode << " " << describe(rays[i]) << "\n  batch " << got.str() << "\n  query "
+                << tr.committed.str() << "\n  seed " << seed;
+            generated += out[i].type == VKAS_COMMITTED_INTERSECTION_GENERATED;
+        }
+        if (!(flags & VKAS_RAY_FLAG_SKIP_AABBS)) {
+            EXPECT_GT(ctx.calls.load(), 0u);
+            EXPECT_GT(generated, 0u) << "mode " << mode;
+        } else {
+            EXPECT_EQ(ctx.calls.load(), 0u);
+        }
+    }
+    // Without a callback, AABBs never hit (as in vkasTraceRays).
+    std::vector<VkasHit> a(batch.size()), b(batch.size());
+    ASSERT_EQ(vkasTraceRaysProcedural(device, tlas->handle, VKAS_TRACE_MODE_CLOSEST_HIT, flags, 0xFF,
+                                      uint32_t(batch.size()), batch.data(), a.data(), nullptr, nullptr),
+              VK_SUCCESS);
+    ASSERT_EQ(vkasTraceRays(device, tlas->handle, VKAS_TRACE_MODE_CLOSEST_HIT, flags, 0xFF, uint32_t(batch.size()),
+                            batch.data(), b.data()),
+              VK_SUCCESS);
+    for (size_t i = 0; i < batch.size(); ++i) {
+        EXPECT_TRUE(identical(fromBatch(a[i]), fromBatch(b[i])));
+        EXPECT_NE(a[i].type, VKAS_COMMITTED_INTERSECTION_GENERATED);
+    }
+    EXPECT_TRUE(takeValidationErrors().empty());
 }

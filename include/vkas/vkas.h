@@ -95,6 +95,14 @@ typedef struct VkasRayQuery { /* 16-byte aligned */
 VKAS_API void vkasRayQueryInitialize(VkasRayQuery* q, VkAccelerationStructureKHR topLevel, uint32_t rayFlags,
                                      uint32_t cullMask, const float origin[3], float tMin, const float direction[3],
                                      float tMax);
+/*
+ * [VK_NV_ray_tracing_motion_blur] vkasRayQueryInitialize with a ray time in [0, 1] (VUID-RuntimeSpirv-
+ * OpTraceRayMotionNV-06366): motion instances and motion triangles are intersected as they are at that time.
+ * vkasRayQueryInitialize traces at time 0.
+ */
+VKAS_API void vkasRayQueryInitializeMotion(VkasRayQuery* q, VkAccelerationStructureKHR topLevel, uint32_t rayFlags,
+                                           uint32_t cullMask, const float origin[3], float tMin,
+                                           const float direction[3], float tMax, float time);
 VKAS_API VkBool32 vkasRayQueryProceed(VkasRayQuery* q);
 VKAS_API void vkasRayQueryTerminate(VkasRayQuery* q);
 VKAS_API void vkasRayQueryGenerateIntersection(VkasRayQuery* q, float tHit);
@@ -121,6 +129,40 @@ VKAS_API void vkasRayQueryGetIntersectionObjectToWorld(const VkasRayQuery* q, Vk
 VKAS_API void vkasRayQueryGetIntersectionWorldToObject(const VkasRayQuery* q, VkBool32 committed, float out[3][4]);
 VKAS_API void vkasRayQueryGetIntersectionTriangleVertexPositions(const VkasRayQuery* q, VkBool32 committed,
                                                                  float out[3][3]);
+
+/*
+ * [VK_NV_ray_tracing_linear_swept_spheres] Spheres and linear swept spheres (LSS) are built-in primitives: their
+ * candidates and hits report the TRIANGLE intersection types (candidate 0, committed 1), as SPIR-V's
+ * SPV_NV_linear_swept_spheres does (it adds no intersection type values); opaque ones are committed during
+ * Proceed, non-opaque ones come back as candidates for vkasRayQueryConfirmIntersection. These functions tell
+ * them apart and return their data, one per SPIR-V instruction (OpRayQueryIsSphereHitNV, OpRayQueryIsLSSHitNV,
+ * OpRayQueryGetIntersectionSpherePositionNV, ...SphereRadiusNV, ...LSSPositionsNV, ...LSSRadiiNV,
+ * ...LSSHitValueNV). Positions are object-space (as decoded, rounded to float); radii as given. For any other kind
+ * of intersection (or none) the getters return zeros and the Is* functions VK_FALSE. Barycentrics and FrontFace
+ * are 0 / VK_FALSE for sphere and LSS intersections.
+ */
+VKAS_API VkBool32 vkasRayQueryIsSphereHit(const VkasRayQuery* q, VkBool32 committed);
+VKAS_API VkBool32 vkasRayQueryIsLssHit(const VkasRayQuery* q, VkBool32 committed);
+VKAS_API void vkasRayQueryGetIntersectionSpherePosition(const VkasRayQuery* q, VkBool32 committed, float out[3]);
+VKAS_API float vkasRayQueryGetIntersectionSphereRadius(const VkasRayQuery* q, VkBool32 committed);
+/* The two endpoints (out[0], out[1]) and their radii, in application order. */
+VKAS_API void vkasRayQueryGetIntersectionLssPositions(const VkasRayQuery* q, VkBool32 committed, float out[2][3]);
+VKAS_API void vkasRayQueryGetIntersectionLssRadii(const VkasRayQuery* q, VkBool32 committed, float out[2]);
+/* The hit value u in [0, 1]: the parameter along the segment of the swept sphere the hit point lies on; 0 or 1
+ * when the ray enters through an end cap. */
+VKAS_API float vkasRayQueryGetIntersectionLssHitValue(const VkasRayQuery* q, VkBool32 committed);
+
+/*
+ * The intersection's primitive type, vkas-specific: the SPIR-V intersection types above cannot tell spheres and
+ * LSS from triangles, this can. For the committed intersection: NONE when there is none, AABB for a generated hit.
+ * For the candidate: TRIANGLE, AABB, SPHERE or LSS while Proceed's last call returned VK_TRUE, NONE otherwise.
+ */
+#define VKAS_INTERSECTION_PRIMITIVE_NONE 0u
+#define VKAS_INTERSECTION_PRIMITIVE_TRIANGLE 1u
+#define VKAS_INTERSECTION_PRIMITIVE_AABB 2u
+#define VKAS_INTERSECTION_PRIMITIVE_SPHERE 3u
+#define VKAS_INTERSECTION_PRIMITIVE_LSS 4u
+VKAS_API uint32_t vkasRayQueryGetIntersectionPrimitiveType(const VkasRayQuery* q, VkBool32 committed);
 
 /* ---------------------------------------------------------------------------------------------------------- */
 /* Batch tracing: many rays at once, spread over the device's worker threads                                  */
@@ -153,12 +195,46 @@ typedef enum VkasTraceMode {
 /*
  * Traces rayCount rays as if each ran a ray query to completion, confirming every non-opaque triangle candidate
  * (the behaviour of a pipeline whose any-hit shader is unused), and writes pHits[i] for pRays[i]. AABBs never
- * produce hits here (there is no intersection shader): use a ray query and vkasRayQueryGenerateIntersection.
+ * produce hits here (there is no intersection shader): use vkasTraceRaysProcedural, or a ray query and
+ * vkasRayQueryGenerateIntersection. Spheres and linear swept spheres are confirmed like triangles: their hits have
+ * type TRIANGLE, the ids and t, barycentrics 0 and frontFace VK_FALSE.
  * Returns VK_SUCCESS, or VK_ERROR_VALIDATION_FAILED_EXT (nothing written) when validation finds bad parameters.
  */
 VKAS_API VkResult vkasTraceRays(VkDevice device, VkAccelerationStructureKHR topLevel, VkasTraceMode mode,
                                 uint32_t rayFlags, uint32_t cullMask, uint32_t rayCount, const VkasRay* pRays,
                                 VkasHit* pHits);
+
+/* An AABB candidate met by vkasTraceRaysProcedural: what an intersection shader would be given. */
+typedef struct VkasAabbCandidate {
+    uint32_t rayIndex; /* index of the ray in pRays */
+    int32_t instanceId;
+    int32_t instanceCustomIndex;
+    int32_t geometryIndex;
+    int32_t primitiveIndex;
+    float objectRayOrigin[3];    /* the ray in the instance's object space */
+    float objectRayDirection[3];
+    float tMin;                  /* the ray's tMin */
+    float tMax;                  /* the current tMax: the closest t committed so far, or the ray's tMax */
+    VkBool32 opaque;             /* the resolved opacity (geometry, instance and ray flags) */
+} VkasAabbCandidate;
+
+/*
+ * The intersection step for AABB primitives: return VK_TRUE and set *pTHit to report an intersection at *pTHit.
+ * A reported t outside [tMin, tMax] is ignored (as OpReportIntersectionKHR rejects it). Called concurrently from the
+ * device's worker threads, possibly more than once for the same candidate.
+ */
+typedef VkBool32(VKAPI_PTR* PFN_vkasIntersectAabb)(void* pUserData, const VkasAabbCandidate* pCandidate,
+                                                    float* pTHit);
+
+/*
+ * vkasTraceRays with procedural primitives: every AABB candidate goes to pfnIntersect, and an intersection it
+ * reports is committed as a GENERATED hit (there is no any-hit step, so non-opaque ones are accepted too).
+ * pfnIntersect may be NULL: AABBs then never produce hits, as in vkasTraceRays.
+ */
+VKAS_API VkResult vkasTraceRaysProcedural(VkDevice device, VkAccelerationStructureKHR topLevel, VkasTraceMode mode,
+                                          uint32_t rayFlags, uint32_t cullMask, uint32_t rayCount,
+                                          const VkasRay* pRays, VkasHit* pHits, PFN_vkasIntersectAabb pfnIntersect,
+                                          void* pUserData);
 
 #ifdef __cplusplus
 }

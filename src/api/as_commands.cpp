@@ -7,11 +7,13 @@
 #include "api/device.hpp"
 #include "api/entry_points.hpp"
 #include "api/limits.hpp"
+#include "api/sphere_validation.hpp"
 #include "api/validation.hpp"
 #include "engine/as_build.hpp"
 #include "engine/build_sizes.hpp"
 #include "engine/format.hpp"
 #include "engine/geometry_fetch.hpp"
+#include "engine/motion.hpp"
 #include "engine/vertex_format.hpp"
 
 namespace vkas::entry {
@@ -47,6 +49,9 @@ void checkGeometryInfo(Validator& v, const VkAccelerationStructureBuildGeometryI
               (info.flags & VK_BUILD_ACCELERATION_STRUCTURE_PREFER_FAST_BUILD_BIT_KHR)),
             "VUID-VkAccelerationStructureBuildGeometryInfoKHR-flags-03796",
             "%s.flags has both PREFER_FAST_TRACE and PREFER_FAST_BUILD.", where);
+    v.check(!(motion::isMotionBuild(info.flags) && info.type == VK_ACCELERATION_STRUCTURE_TYPE_GENERIC_KHR),
+            "VUID-VkAccelerationStructureBuildGeometryInfoKHR-flags-04929",
+            "%s.flags has VK_BUILD_ACCELERATION_STRUCTURE_MOTION_BIT_NV but type is GENERIC.", where);
     if (info.geometryCount != 0) {
         v.check((info.pGeometries == nullptr) != (info.ppGeometries == nullptr),
                 "VUID-VkAccelerationStructureBuildGeometryInfoKHR-pGeometries-03788",
@@ -72,7 +77,9 @@ void checkGeometryInfo(Validator& v, const VkAccelerationStructureBuildGeometryI
                 "VUID-VkAccelerationStructureGeometryKHR-sType-sType", "%s geometry %u: sType is %d.", where, g,
                 int(geom->sType));
         v.check(geom->geometryType == VK_GEOMETRY_TYPE_TRIANGLES_KHR || geom->geometryType == VK_GEOMETRY_TYPE_AABBS_KHR ||
-                    geom->geometryType == VK_GEOMETRY_TYPE_INSTANCES_KHR,
+                    geom->geometryType == VK_GEOMETRY_TYPE_INSTANCES_KHR ||
+                    geom->geometryType == VK_GEOMETRY_TYPE_SPHERES_NV ||
+                    geom->geometryType == VK_GEOMETRY_TYPE_LINEAR_SWEPT_SPHERES_NV,
                 "VUID-VkAccelerationStructureGeometryKHR-geometryType-parameter",
                 "%s geometry %u: geometryType %d is not supported by vkas yet.", where, g, int(geom->geometryType));
         v.check((geom->flags & ~uint32_t(VK_GEOMETRY_OPAQUE_BIT_KHR | VK_GEOMETRY_NO_DUPLICATE_ANY_HIT_INVOCATION_BIT_KHR)) == 0,
@@ -122,6 +129,9 @@ void checkGeometryInfo(Validator& v, const VkAccelerationStructureBuildGeometryI
             v.check(a.stride <= UINT32_MAX, "VUID-VkAccelerationStructureGeometryAabbsDataKHR-stride-03820",
                     "%s geometry %u: aabbs.stride %llu exceeds 2^32-1.", where, g, (ull)a.stride);
         }
+        if (geom->geometryType == VK_GEOMETRY_TYPE_SPHERES_NV ||
+            geom->geometryType == VK_GEOMETRY_TYPE_LINEAR_SWEPT_SPHERES_NV)
+            checkSweptSpheresGeometry(v, *geom, where, g);
         if (geom->geometryType == VK_GEOMETRY_TYPE_INSTANCES_KHR) {
             v.check(geom->geometry.instances.sType == VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_GEOMETRY_INSTANCES_DATA_KHR,
                     "VUID-VkAccelerationStructureGeometryInstancesDataKHR-sType-sType",
@@ -179,7 +189,8 @@ VKAPI_ATTR void VKAPI_CALL GetAccelerationStructureBuildSizesKHR(
     }
     uint64_t primitives = 0;
     for (uint32_t g = 0; g < pBuildInfo->geometryCount; ++g) primitives += pMaxPrimitiveCounts[g];
-    StructureSizes s = structureSizes(structureType(pBuildInfo->type), pBuildInfo->geometryCount, primitives);
+    StructureSizes s = structureSizes(structureType(pBuildInfo->type), pBuildInfo->geometryCount, primitives,
+                                      usesMotionRecords(*pBuildInfo));
     pSizeInfo->accelerationStructureSize = s.structureSize;
     pSizeInfo->buildScratchSize = s.buildScratchSize;
     pSizeInfo->updateScratchSize = s.updateScratchSize;
@@ -211,6 +222,18 @@ VKAPI_ATTR VkResult VKAPI_CALL CreateAccelerationStructureKHR(VkDevice device,
             v.check((ci.createFlags & VK_ACCELERATION_STRUCTURE_CREATE_DEVICE_ADDRESS_CAPTURE_REPLAY_BIT_KHR) == 0,
                     "VUID-VkAccelerationStructureCreateInfoKHR-createFlags-03613",
                     "createFlags has DEVICE_ADDRESS_CAPTURE_REPLAY but the feature is not enabled.");
+            if ((ci.createFlags & VK_ACCELERATION_STRUCTURE_CREATE_MOTION_BIT_NV) &&
+                ci.type == VK_ACCELERATION_STRUCTURE_TYPE_TOP_LEVEL_KHR) {  // [NV-motion]
+                const VkAccelerationStructureMotionInfoNV* motionInfo = nullptr;
+                for (auto* p = static_cast<const VkBaseInStructure*>(ci.pNext); p; p = p->pNext)
+                    if (p->sType == VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_MOTION_INFO_NV)
+                        motionInfo = reinterpret_cast<const VkAccelerationStructureMotionInfoNV*>(p);
+                if (v.check(motionInfo != nullptr, "VUID-VkAccelerationStructureCreateInfoKHR-createFlags-04954",
+                            "createFlags has VK_ACCELERATION_STRUCTURE_CREATE_MOTION_BIT_NV and type is TOP_LEVEL, but "
+                            "the pNext chain has no VkAccelerationStructureMotionInfoNV."))
+                    v.check(motionInfo->flags == 0, "VUID-VkAccelerationStructureMotionInfoNV-flags-zerobitmask",
+                            "VkAccelerationStructureMotionInfoNV::flags is 0x%x.", motionInfo->flags);
+            }
             v.check(ci.offset % limits::kAccelerationStructureOffsetAlignment == 0,
                     "VUID-VkAccelerationStructureCreateInfoKHR-offset-03734",
                     "pCreateInfo->offset %llu is not a multiple of 256.", (ull)ci.offset);
@@ -353,6 +376,26 @@ void checkBuildInfo(Validator& v, const Device& dev, const VkAccelerationStructu
             v.check(dst->type != VK_ACCELERATION_STRUCTURE_TYPE_TOP_LEVEL_KHR,
                     "VUID-vkBuildAccelerationStructuresKHR-pInfos-03700",
                     "%s is a bottom-level build into a top-level structure.", where);
+        // [NV-motion] The build's MOTION flag and the structure's CREATE_MOTION flag go together.
+        const bool createdMotion = (dst->createFlags & VK_ACCELERATION_STRUCTURE_CREATE_MOTION_BIT_NV) != 0;
+        v.check(!createdMotion || motion::isMotionBuild(info.flags),
+                "VUID-VkAccelerationStructureBuildGeometryInfoKHR-dstAccelerationStructure-04927",
+                "%s.dstAccelerationStructure was created with VK_ACCELERATION_STRUCTURE_CREATE_MOTION_BIT_NV but "
+                "flags lacks VK_BUILD_ACCELERATION_STRUCTURE_MOTION_BIT_NV.", where);
+        v.check(createdMotion || !motion::isMotionBuild(info.flags),
+                "VUID-VkAccelerationStructureBuildGeometryInfoKHR-flags-04928",
+                "%s.flags has VK_BUILD_ACCELERATION_STRUCTURE_MOTION_BIT_NV but dstAccelerationStructure was not "
+                "created with VK_ACCELERATION_STRUCTURE_CREATE_MOTION_BIT_NV.", where);
+        for (uint32_t g = 0; g < info.geometryCount && !createdMotion; ++g) {
+            const VkAccelerationStructureGeometryKHR* geom = geometryAt(info, g);
+            if (geom && geom->geometryType == VK_GEOMETRY_TYPE_TRIANGLES_KHR &&
+                !v.check(motion::findMotionTriangles(geom->geometry.triangles) == nullptr,
+                         "VUID-VkAccelerationStructureCreateInfoKHR-createFlags-04955",
+                         "%s geometry %u has VkAccelerationStructureGeometryMotionTrianglesDataNV but "
+                         "dstAccelerationStructure was not created with VK_ACCELERATION_STRUCTURE_CREATE_MOTION_BIT_NV.",
+                         where, g))
+                break;
+        }
     }
     if (info.mode == VK_BUILD_ACCELERATION_STRUCTURE_MODE_UPDATE_KHR) {
         const auto* src =
@@ -388,6 +431,9 @@ void checkBuildInfo(Validator& v, const Device& dev, const VkAccelerationStructu
         const auto& r = ranges[g];
         if (geom->geometryType == VK_GEOMETRY_TYPE_AABBS_KHR) {
             checkAabbRange(v, geom->geometry.aabbs, r, where, g);
+        } else if (geom->geometryType == VK_GEOMETRY_TYPE_SPHERES_NV ||
+                   geom->geometryType == VK_GEOMETRY_TYPE_LINEAR_SWEPT_SPHERES_NV) {
+            checkSweptSpheresRange(v, *geom, r, where, g);
         } else if (geom->geometryType == VK_GEOMETRY_TYPE_TRIANGLES_KHR) {
             const auto& t = geom->geometry.triangles;
             const VertexFormatInfo* fmt = vertexFormatInfo(t.vertexFormat);
@@ -442,7 +488,37 @@ void checkBuildInfo(Validator& v, const Device& dev, const VkAccelerationStructu
                     "%s: primitiveOffset %u is not a multiple of 16.", where, r.primitiveOffset);
             v.check(r.primitiveCount <= limits::kMaxInstanceCount, "VUID-vkBuildAccelerationStructuresKHR-pInfos-03801",
                     "%s: primitiveCount %u exceeds maxInstanceCount.", where, r.primitiveCount);
-            if (r.primitiveCount != 0 &&
+            if (r.primitiveCount != 0 && motion::isMotionBuild(info.flags) && inst.data.hostAddress != nullptr &&
+                r.primitiveOffset % 16 == 0) {
+                // [NV-motion] VkAccelerationStructureMotionInstanceNV records (or typed pointers to their members).
+                motion::MotionInstanceSource source(inst, r);
+                for (uint32_t k = 0; k < r.primitiveCount; ++k) {
+                    if (inst.arrayOfPointers &&
+                        !v.check((source.rawAddress(k) & ~uintptr_t(0xF)) != 0,
+                                 "VUID-vkBuildAccelerationStructuresKHR-pInfos-03778",
+                                 "%s: instance pointer %u is NULL.", where, k))
+                        continue;
+                    motion::RawMotionInstance mi;
+                    source.fetch(k, mi);
+                    if (!v.check(mi.type <= motion::kSrt, "VUID-VkAccelerationStructureMotionInstanceNV-type-parameter",
+                                 "%s: motion instance %u has type %u, not a VkAccelerationStructureMotionInstanceTypeNV.",
+                                 where, k, mi.type))
+                        continue;
+                    v.check(mi.flags == 0, "VUID-VkAccelerationStructureMotionInstanceNV-flags-zerobitmask",
+                            "%s: motion instance %u has flags 0x%x.", where, k, mi.flags);
+                    if (mi.reference == 0) continue;
+                    const auto* blas = dev.live<AccelerationStructure>(reinterpret_cast<const void*>(mi.reference),
+                                                                       ObjectMagic::AccelerationStructure);
+                    if (!v.check(blas != nullptr, "VUID-vkBuildAccelerationStructuresKHR-pInfos-04930",
+                                 "%s: motion instance %u references 0x%llx, which is not a live "
+                                 "VkAccelerationStructureKHR.",
+                                 where, k, (ull)mi.reference))
+                        continue;
+                    v.check(blas->buffer->memory != nullptr, "VUID-vkBuildAccelerationStructuresKHR-pInfos-03709",
+                            "%s: instance %u references a structure whose buffer is not bound to memory.", where, k);
+                    if (v.failureCount() > 16) break;  // enough said
+                }
+            } else if (r.primitiveCount != 0 &&
                 v.check(inst.data.hostAddress != nullptr, "VUID-vkBuildAccelerationStructuresKHR-pInfos-03778",
                         "%s: instances.data.hostAddress is NULL.", where) &&
                 r.primitiveOffset % 16 == 0) {
@@ -470,7 +546,8 @@ void checkBuildInfo(Validator& v, const Device& dev, const VkAccelerationStructu
         }
     }
     if (dst && info.type != VK_ACCELERATION_STRUCTURE_TYPE_GENERIC_KHR) {
-        StructureSizes sizes = structureSizes(structureType(info.type), info.geometryCount, total);
+        StructureSizes sizes =
+            structureSizes(structureType(info.type), info.geometryCount, total, usesMotionRecords(info));
         v.check(dst->size >= sizes.structureSize, "VUID-vkBuildAccelerationStructuresKHR-pInfos-10126",
                 "%s.dstAccelerationStructure has size %llu but the build needs %llu.", where, (ull)dst->size,
                 (ull)sizes.structureSize);

@@ -1,5 +1,8 @@
 // vkasTraceRays: many rays, each traced as a ray query run to completion, spread over the worker threads.
+#include <cstdio>
+#include <cstring>
 #include <memory>
+#include <string>
 
 #include "api/device.hpp"
 #include "api/validation.hpp"
@@ -35,16 +38,44 @@ void writeHit(const vkas::RayQueryState& q, VkasHit& out) {
     out.frontFace = h.frontFace ? VK_TRUE : VK_FALSE;
 }
 
-}  // namespace
+// Runs one query to completion the way a pipeline without any-hit shaders would: non-opaque triangles are
+// accepted, and AABB candidates go to the intersection callback (none: never a hit).
+void runQuery(vkas::RayQueryState& q, uint32_t rayIndex, PFN_vkasIntersectAabb intersect, void* userData) {
+    if (!intersect) {
+        vkas::queryRunToCompletion(q);
+        return;
+    }
+    while (vkas::queryProceed(q)) {
+        const vkas::QueryHit& c = q.candidate;
+        if (c.type != vkas::kCandidateAabb) {
+            vkas::queryConfirm(q);
+            continue;
+        }
+        VkasAabbCandidate info{};
+        info.rayIndex = rayIndex;
+        info.instanceId = int32_t(c.instance->instanceId);
+        info.instanceCustomIndex = int32_t(c.instance->customIndexAndMask & 0xFFFFFFu);
+        info.geometryIndex = vkas::hitGeometryIndex(c);
+        info.primitiveIndex = vkas::hitPrimitiveIndex(c);
+        std::memcpy(info.objectRayOrigin, c.objectOrigin, sizeof info.objectRayOrigin);
+        std::memcpy(info.objectRayDirection, c.objectDirection, sizeof info.objectRayDirection);
+        info.tMin = q.tMin;
+        info.tMax = q.tMax;
+        info.opaque = c.aabbOpaque ? VK_TRUE : VK_FALSE;
+        float tHit = 0.0f;
+        if (intersect(userData, &info, &tHit) && tHit >= q.tMin && tHit <= q.tMax) vkas::queryGenerate(q, tHit);
+    }
+}
 
-extern "C" VKAS_API VkResult vkasTraceRays(VkDevice device, VkAccelerationStructureKHR topLevel, VkasTraceMode mode,
-                                           uint32_t rayFlags, uint32_t cullMask, uint32_t rayCount,
-                                           const VkasRay* pRays, VkasHit* pHits) {
+VkResult traceBatch(VkDevice device, VkAccelerationStructureKHR topLevel, VkasTraceMode mode, uint32_t rayFlags,
+                    uint32_t cullMask, uint32_t rayCount, const VkasRay* pRays, VkasHit* pHits,
+                    PFN_vkasIntersectAabb intersect, void* userData, const char* command) {
     vkas::Device* dev = vkas::Device::fromHandle(device);
-    vkas::Validator v(dev, "vkasTraceRays");
+    vkas::Validator v(dev, command);
     const vkas::AccelerationStructure* tlas = nullptr;
+    const std::string vuid = std::string("VUID-") + command;
     if (!dev) {
-        v.fail("VUID-vkasTraceRays-device-parameter", "device is not a valid VkDevice.");
+        v.fail((vuid + "-device-parameter").c_str(), "device is not a valid VkDevice.");
         return VK_ERROR_VALIDATION_FAILED_EXT;
     }
     if (topLevel != VK_NULL_HANDLE) {
@@ -53,11 +84,11 @@ extern "C" VKAS_API VkResult vkasTraceRays(VkDevice device, VkAccelerationStruct
                    : vkas::fromHandle<vkas::AccelerationStructure>(topLevel);
     }
     if (v.enabled()) {
-        v.check(topLevel == VK_NULL_HANDLE || tlas != nullptr, "VUID-vkasTraceRays-topLevel-parameter",
+        v.check(topLevel == VK_NULL_HANDLE || tlas != nullptr, (vuid + "-topLevel-parameter").c_str(),
                 "topLevel is not a live VkAccelerationStructureKHR.");
         v.check(mode == VKAS_TRACE_MODE_CLOSEST_HIT || mode == VKAS_TRACE_MODE_ANY_HIT,
-                "VUID-vkasTraceRays-mode-parameter", "mode %d is not a VkasTraceMode.", int(mode));
-        v.check(rayCount == 0 || (pRays && pHits), "VUID-vkasTraceRays-pRays-parameter",
+                (vuid + "-mode-parameter").c_str(), "mode %d is not a VkasTraceMode.", int(mode));
+        v.check(rayCount == 0 || (pRays && pHits), (vuid + "-pRays-parameter").c_str(),
                 "pRays or pHits is NULL with rayCount %u.", rayCount);
         if (!v.failed()) {
             static const float origin[3] = {0, 0, 0}, direction[3] = {0, 0, 1};
@@ -72,9 +103,9 @@ extern "C" VKAS_API VkResult vkasTraceRays(VkDevice device, VkAccelerationStruct
         if (v.failed()) return VK_ERROR_VALIDATION_FAILED_EXT;
     }
     const std::byte* block = tlas ? tlas->block() : nullptr;
-    // Without an intersection shader an AABB candidate never becomes a hit, so AABB instances are skipped
+    // Without an intersection step an AABB candidate never becomes a hit, so AABB instances are skipped
     // outright; the flag only ever removes candidates that would be dropped anyway.
-    const uint32_t flags = rayFlags | VKAS_RAY_FLAG_SKIP_AABBS |
+    const uint32_t flags = rayFlags | (intersect ? 0u : VKAS_RAY_FLAG_SKIP_AABBS) |
                            (mode == VKAS_TRACE_MODE_ANY_HIT ? VKAS_RAY_FLAG_TERMINATE_ON_FIRST_HIT : 0u);
     const uint64_t tasks = (uint64_t(rayCount) + kRaysPerTask - 1) / kRaysPerTask;
     dev->workers().parallelFor(tasks, [&](uint64_t task) {
@@ -84,9 +115,26 @@ extern "C" VKAS_API VkResult vkasTraceRays(VkDevice device, VkAccelerationStruct
             const VkasRay& r = pRays[i];
             vkas::queryInitialize(*q, block, vkas::resolveAccelerationStructure, flags, cullMask, r.origin, r.tMin,
                                   r.direction, r.tMax);
-            vkas::queryRunToCompletion(*q);
+            runQuery(*q, uint32_t(i), intersect, userData);
             writeHit(*q, pHits[i]);
         }
     });
     return VK_SUCCESS;
+}
+
+}  // namespace
+
+extern "C" VKAS_API VkResult vkasTraceRays(VkDevice device, VkAccelerationStructureKHR topLevel, VkasTraceMode mode,
+                                           uint32_t rayFlags, uint32_t cullMask, uint32_t rayCount,
+                                           const VkasRay* pRays, VkasHit* pHits) {
+    return traceBatch(device, topLevel, mode, rayFlags, cullMask, rayCount, pRays, pHits, nullptr, nullptr,
+                      "vkasTraceRays");
+}
+
+extern "C" VKAS_API VkResult vkasTraceRaysProcedural(VkDevice device, VkAccelerationStructureKHR topLevel,
+                                                     VkasTraceMode mode, uint32_t rayFlags, uint32_t cullMask,
+                                                     uint32_t rayCount, const VkasRay* pRays, VkasHit* pHits,
+                                                     PFN_vkasIntersectAabb pfnIntersect, void* pUserData) {
+    return traceBatch(device, topLevel, mode, rayFlags, cullMask, rayCount, pRays, pHits, pfnIntersect, pUserData,
+                      "vkasTraceRaysProcedural");
 }

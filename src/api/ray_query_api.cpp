@@ -6,6 +6,7 @@
 #include "api/device.hpp"
 #include "api/objects.hpp"
 #include "api/validation.hpp"
+#include "engine/motion.hpp"
 #include "engine/traversal.hpp"
 #include "vkas/vkas.h"
 
@@ -96,6 +97,31 @@ VKAS_API void vkasRayQueryInitialize(VkasRayQuery* q, VkAccelerationStructureKHR
     object(q).device = tlas ? tlas->device : nullptr;
 }
 
+// [NV-motion] vkasRayQueryInitialize with a ray time. The time rule is the one of OpTraceRayMotionNV (SPIR-V has
+// no ray-query instruction with a time): VUID-RuntimeSpirv-OpTraceRayMotionNV-06366, time in [0.0, 1.0]. A query
+// that breaks it (NaN included) is reported and behaves as for a null acceleration structure.
+VKAS_API void vkasRayQueryInitializeMotion(VkasRayQuery* q, VkAccelerationStructureKHR topLevel, uint32_t rayFlags,
+                                           uint32_t cullMask, const float origin[3], float tMin,
+                                           const float direction[3], float tMax, float time) {
+    auto* tlas = vkas::fromHandle<vkas::AccelerationStructure>(topLevel);
+    if (tlas && tlas->magic != vkas::ObjectMagic::AccelerationStructure) tlas = nullptr;
+    vkas::Validator v(tlas ? tlas->device : nullptr, "vkasRayQueryInitializeMotion");
+    bool valid = true;
+    if (v.enabled()) {
+        valid = vkas::validateRay(v, tlas, rayFlags, origin, tMin, direction, tMax, "");
+        valid &= v.check(time >= 0.0f && time <= 1.0f, "VUID-RuntimeSpirv-OpTraceRayMotionNV-06366",
+                         "the ray time %g is not between 0.0 and 1.0.", double(time));
+    } else if (!(time >= 0.0f && time <= 1.0f)) {
+        valid = false;  // never interpolate outside [0, 1], even without validation
+    }
+    const std::byte* block = (tlas && valid) ? tlas->block() : nullptr;
+    static const float zero[3] = {0, 0, 0};
+    vkas::queryInitialize(state(q), block, vkas::resolveAccelerationStructure, rayFlags, cullMask,
+                          valid ? origin : zero, valid ? tMin : 0.0f, valid ? direction : zero, valid ? tMax : 0.0f,
+                          valid ? time : 0.0f);
+    object(q).device = tlas ? tlas->device : nullptr;
+}
+
 VKAS_API VkBool32 vkasRayQueryProceed(VkasRayQuery* q) { return vkas::queryProceed(state(q)) ? VK_TRUE : VK_FALSE; }
 VKAS_API void vkasRayQueryTerminate(VkasRayQuery* q) { vkas::queryTerminate(state(q)); }
 VKAS_API void vkasRayQueryGenerateIntersection(VkasRayQuery* q, float tHit) {
@@ -160,27 +186,82 @@ VKAS_API void vkasRayQueryGetIntersectionObjectRayDirection(const VkasRayQuery* 
                                                             float out[3]) {
     std::memcpy(out, hit(q, committed).objectDirection, 3 * sizeof(float));
 }
+// [NV-motion] Motion instances report their transforms at the ray time (the ones traversal used).
 VKAS_API void vkasRayQueryGetIntersectionObjectToWorld(const VkasRayQuery* q, VkBool32 committed, float out[3][4]) {
     const QueryHit& h = hit(q, committed);
+    float unused[3][4];
     if (h.instance)
-        std::memcpy(out, h.instance->objectToWorld, 12 * sizeof(float));
+        vkas::motion::instanceTransformsAt(*h.instance, state(q).time, out, unused);
     else
         std::memset(out, 0, 12 * sizeof(float));
 }
 VKAS_API void vkasRayQueryGetIntersectionWorldToObject(const VkasRayQuery* q, VkBool32 committed, float out[3][4]) {
     const QueryHit& h = hit(q, committed);
+    float unused[3][4];
     if (h.instance)
-        std::memcpy(out, h.instance->worldToObject, 12 * sizeof(float));
+        vkas::motion::instanceTransformsAt(*h.instance, state(q).time, unused, out);
     else
         std::memset(out, 0, 12 * sizeof(float));
 }
 VKAS_API void vkasRayQueryGetIntersectionTriangleVertexPositions(const VkasRayQuery* q, VkBool32 committed,
                                                                  float out[3][3]) {
     const QueryHit& h = hit(q, committed);  // AABB candidates and generated hits have no triangle: zeros
-    if (h.triangle)
+    if (h.triangle && (h.triangle->flags & vkas::format::kTriangleMotion)) {
+        // [NV-motion] The positions at the ray time: the triangle that was intersected.
+        const auto* rec = reinterpret_cast<const vkas::format::MotionTriangleRecord*>(h.triangle);
+        for (int j = 0; j < 3; ++j)
+            for (int c = 0; c < 3; ++c) out[j][c] = vkas::motion::lerp(rec->base.v[j][c], rec->v1[j][c], state(q).time);
+    } else if (h.triangle)
         std::memcpy(out, h.triangle->v, 9 * sizeof(float));
     else
         std::memset(out, 0, 9 * sizeof(float));
+}
+
+VKAS_API uint32_t vkasRayQueryGetIntersectionPrimitiveType(const VkasRayQuery* q, VkBool32 committed) {
+    const QueryHit& h = hit(q, committed);
+    if (committed ? h.type == VKAS_COMMITTED_INTERSECTION_NONE : !state(q).candidatePending)
+        return VKAS_INTERSECTION_PRIMITIVE_NONE;
+    return h.triangle ? VKAS_INTERSECTION_PRIMITIVE_TRIANGLE
+           : h.aabb   ? VKAS_INTERSECTION_PRIMITIVE_AABB
+           : h.sphere ? VKAS_INTERSECTION_PRIMITIVE_SPHERE
+           : h.lss    ? VKAS_INTERSECTION_PRIMITIVE_LSS
+                      : VKAS_INTERSECTION_PRIMITIVE_NONE;
+}
+
+VKAS_API VkBool32 vkasRayQueryIsSphereHit(const VkasRayQuery* q, VkBool32 committed) {
+    return hit(q, committed).sphere ? VK_TRUE : VK_FALSE;
+}
+VKAS_API VkBool32 vkasRayQueryIsLssHit(const VkasRayQuery* q, VkBool32 committed) {
+    return hit(q, committed).lss ? VK_TRUE : VK_FALSE;
+}
+VKAS_API void vkasRayQueryGetIntersectionSpherePosition(const VkasRayQuery* q, VkBool32 committed, float out[3]) {
+    const QueryHit& h = hit(q, committed);
+    if (h.sphere)
+        std::memcpy(out, h.sphere->center, 3 * sizeof(float));
+    else
+        std::memset(out, 0, 3 * sizeof(float));
+}
+VKAS_API float vkasRayQueryGetIntersectionSphereRadius(const VkasRayQuery* q, VkBool32 committed) {
+    const QueryHit& h = hit(q, committed);
+    return h.sphere ? h.sphere->radius : 0.0f;
+}
+VKAS_API void vkasRayQueryGetIntersectionLssPositions(const VkasRayQuery* q, VkBool32 committed, float out[2][3]) {
+    const QueryHit& h = hit(q, committed);
+    if (h.lss) {
+        std::memcpy(out[0], h.lss->p0, 3 * sizeof(float));
+        std::memcpy(out[1], h.lss->p1, 3 * sizeof(float));
+    } else {
+        std::memset(out, 0, 6 * sizeof(float));
+    }
+}
+VKAS_API void vkasRayQueryGetIntersectionLssRadii(const VkasRayQuery* q, VkBool32 committed, float out[2]) {
+    const QueryHit& h = hit(q, committed);
+    out[0] = h.lss ? h.lss->r0 : 0.0f;
+    out[1] = h.lss ? h.lss->r1 : 0.0f;
+}
+VKAS_API float vkasRayQueryGetIntersectionLssHitValue(const VkasRayQuery* q, VkBool32 committed) {
+    const QueryHit& h = hit(q, committed);
+    return h.lss ? h.lssHitValue : 0.0f;
 }
 
 }  // extern "C"

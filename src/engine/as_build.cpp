@@ -7,6 +7,8 @@
 #include "engine/bvh_builder.hpp"
 #include "engine/format.hpp"
 #include "engine/geometry_fetch.hpp"
+#include "engine/motion.hpp"
+#include "engine/sphere_fetch.hpp"
 
 namespace vkas {
 
@@ -15,6 +17,13 @@ using namespace format;
 const VkAccelerationStructureGeometryKHR& buildGeometry(const VkAccelerationStructureBuildGeometryInfoKHR& info,
                                                         uint32_t i) {
     return info.pGeometries ? info.pGeometries[i] : *info.ppGeometries[i];
+}
+
+bool usesMotionRecords(const VkAccelerationStructureBuildGeometryInfoKHR& info) {
+    if (!motion::isMotionBuild(info.flags)) return false;
+    if (info.type == VK_ACCELERATION_STRUCTURE_TYPE_TOP_LEVEL_KHR) return true;
+    if (info.geometryCount == 0 || (!info.pGeometries && !info.ppGeometries)) return false;
+    return buildGeometry(info, 0).geometryType == VK_GEOMETRY_TYPE_TRIANGLES_KHR;
 }
 
 namespace {
@@ -147,6 +156,46 @@ uint32_t gatherTriangles(const BuildJob& job, PrimRef* refs, TriangleRecord* tem
     return n;
 }
 
+// [NV-motion] gatherTriangles for a motion bottom level: every triangle geometry gives its time-0 positions
+// (vertexData) and time-1 positions (VkAccelerationStructureGeometryMotionTrianglesDataNV::vertexData, same format,
+// stride, indexing and geometry transform; a geometry without it does not move). A triangle is inactive when a
+// vertex X is NaN at either time. Degenerate triangles are always kept: a triangle can be degenerate at some
+// times only, and the intersection test rejects zero-area triangles anyway. The box is the union of both times'
+// boxes, which holds the linear interpolation in between (interpolated coordinates never leave [v0, v1]).
+uint32_t gatherMotionTriangles(const BuildJob& job, PrimRef* refs, MotionTriangleRecord* temp) {
+    const auto& info = *job.info;
+    uint32_t n = 0;
+    for (uint32_t g = 0; g < info.geometryCount; ++g) {
+        const auto& geom = buildGeometry(info, g);
+        if (geom.geometryType != VK_GEOMETRY_TYPE_TRIANGLES_KHR) continue;
+        TriangleSource source(geom.geometry.triangles, job.ranges[g]);
+        VkAccelerationStructureGeometryTrianglesDataKHR atOne = geom.geometry.triangles;
+        const auto* m = motion::findMotionTriangles(geom.geometry.triangles);
+        if (m && m->vertexData.hostAddress) atOne.vertexData = m->vertexData;  // NULL: invalid, treated as static
+        TriangleSource source1(atOne, job.ranges[g]);
+        uint32_t flags = kTriangleMotion;
+        if (geom.flags & VK_GEOMETRY_OPAQUE_BIT_KHR) flags |= kTriangleOpaque;
+        if (geom.flags & VK_GEOMETRY_NO_DUPLICATE_ANY_HIT_INVOCATION_BIT_KHR) flags |= kTriangleNoDuplicateAnyHit;
+        for (uint32_t i = 0; i < source.primitiveCount(); ++i) {
+            MotionTriangleRecord rec;
+            std::memset(&rec, 0, sizeof rec);
+            const bool active0 = source.fetch(i, rec.base.v);
+            const bool active1 = source1.fetch(i, rec.v1);
+            if (!active0 || !active1) continue;  // inactive: never hit, never updated back to life
+            rec.base.geometryIndex = g;
+            rec.base.primitiveIndex = i;
+            rec.base.flags = flags;
+            Aabb b;
+            for (auto& v : rec.base.v) b.extend(Vec3{v[0], v[1], v[2]});
+            for (auto& v : rec.v1) b.extend(Vec3{v[0], v[1], v[2]});
+            temp[n] = rec;
+            setRef(refs[n], n, b);
+            ++n;
+        }
+    }
+    return n;
+}
+
 // Fetches the active AABBs of every AABB geometry into temp[] and refs[]; returns how many. The tree bounds
 // each box exactly: the inputs are floats already.
 uint32_t gatherAabbs(const BuildJob& job, PrimRef* refs, AabbRecord* temp) {
@@ -182,15 +231,19 @@ VkResult buildBottomLevel(const BuildJob& job) {
     const auto& info = *job.info;
     uint64_t total = 0;
     for (uint32_t g = 0; g < info.geometryCount; ++g) total += job.ranges[g].primitiveCount;
-    auto worst = structureSizes(StructureType::BottomLevel, info.geometryCount, total);
+    const bool motion = usesMotionRecords(info);  // [NV-motion] triangles: MotionTriangleRecords
+    auto worst = structureSizes(StructureType::BottomLevel, info.geometryCount, total, motion);
     if (worst.structureSize > job.dstSize) return VK_ERROR_UNKNOWN;
 
     // All geometries of a bottom-level structure have one type (VUID 03792): geometry 0 names it.
-    const VkGeometryTypeKHR primitiveType =
-        info.geometryCount != 0 && buildGeometry(info, 0).geometryType == VK_GEOMETRY_TYPE_AABBS_KHR
-            ? VK_GEOMETRY_TYPE_AABBS_KHR
-            : VK_GEOMETRY_TYPE_TRIANGLES_KHR;
-    constexpr size_t kRecordSize = sizeof(TriangleRecord);  // == sizeof(AabbRecord)
+    VkGeometryTypeKHR primitiveType = VK_GEOMETRY_TYPE_TRIANGLES_KHR;
+    if (info.geometryCount != 0) {
+        const VkGeometryTypeKHR first = buildGeometry(info, 0).geometryType;
+        if (first == VK_GEOMETRY_TYPE_AABBS_KHR || first == VK_GEOMETRY_TYPE_SPHERES_NV ||
+            first == VK_GEOMETRY_TYPE_LINEAR_SWEPT_SPHERES_NV)
+            primitiveType = first;
+    }
+    const size_t kRecordSize = motion ? sizeof(MotionTriangleRecord) : sizeof(TriangleRecord);  // == sizeof(AabbRecord), SphereRecord, LssRecord
     PrimRef* refs = nullptr;
     std::byte* temp = nullptr;
     if (total != 0) {
@@ -199,11 +252,17 @@ VkResult buildBottomLevel(const BuildJob& job) {
     }
     const uint32_t n = primitiveType == VK_GEOMETRY_TYPE_AABBS_KHR
                            ? gatherAabbs(job, refs, reinterpret_cast<AabbRecord*>(temp))
+                       : primitiveType == VK_GEOMETRY_TYPE_SPHERES_NV
+                           ? gatherSpheres(job, refs, reinterpret_cast<SphereRecord*>(temp))
+                       : primitiveType == VK_GEOMETRY_TYPE_LINEAR_SWEPT_SPHERES_NV
+                           ? gatherLss(job, refs, reinterpret_cast<LssRecord*>(temp))
+                           : motion ? gatherMotionTriangles(job, refs, reinterpret_cast<MotionTriangleRecord*>(temp))
                            : gatherTriangles(job, refs, reinterpret_cast<TriangleRecord*>(temp));
     StructureLayout pre = structureLayout(StructureType::BottomLevel, info.geometryCount, 0, 0);
     auto* nodes = reinterpret_cast<Node*>(job.dst + pre.nodeOffset);
     BvhBuildResult tree = buildWideBvh(refs, n, {maxLeafSize(StructureType::BottomLevel)}, nodes);
-    StructureLayout layout = structureLayout(StructureType::BottomLevel, info.geometryCount, tree.nodeCount, n);
+    StructureLayout layout =
+        structureLayout(StructureType::BottomLevel, info.geometryCount, tree.nodeCount, n, motion);
     std::byte* records = job.dst + layout.recordOffset;
     for (uint32_t i = 0; i < n; ++i)
         std::memcpy(records + uint64_t(i) * kRecordSize, temp + uint64_t(refs[i].index) * kRecordSize, kRecordSize);
@@ -213,8 +272,77 @@ VkResult buildBottomLevel(const BuildJob& job) {
     return VK_SUCCESS;
 }
 
+// [NV-motion] A top level built with VK_BUILD_ACCELERATION_STRUCTURE_MOTION_BIT_NV: the instances are
+// VkAccelerationStructureMotionInstanceNV (or pointers to their members, the type in the low 4 bits), stored as
+// MotionInstanceRecords whose boxes hold the instance over the whole time range [0, 1].
+VkResult buildMotionTopLevel(const BuildJob& job) {
+    const auto& info = *job.info;
+    uint64_t total = info.geometryCount ? job.ranges[0].primitiveCount : 0;
+    auto worst = structureSizes(StructureType::TopLevel, info.geometryCount, total, true);
+    if (worst.structureSize > job.dstSize) return VK_ERROR_UNKNOWN;
+
+    PrimRef* refs = nullptr;
+    MotionInstanceRecord* temp = nullptr;
+    if (total != 0) {
+        refs = reinterpret_cast<PrimRef*>(alignedScratch(info));
+        temp = reinterpret_cast<MotionInstanceRecord*>(refs + total);
+    }
+    uint32_t n = 0;
+    if (total != 0) {
+        motion::MotionInstanceSource source(buildGeometry(info, 0).geometry.instances, job.ranges[0]);
+        for (uint32_t i = 0; i < source.count(); ++i) {
+            motion::RawMotionInstance inst;
+            if (!source.fetch(i, inst) || inst.reference == 0) continue;  // inactive: still counted in instance ids
+            const std::byte* blas = job.resolver ? job.resolver(inst.reference) : nullptr;
+            if (!blas) continue;  // not a structure (invalid usage, reported by validation)
+            MotionInstanceRecord rec;
+            std::memset(&rec, 0, sizeof rec);
+            if (inst.type == motion::kStatic) {
+                std::memcpy(rec.base.objectToWorld, inst.staticTransform, sizeof rec.base.objectToWorld);
+                Affine3x4d inv;
+                invertAffine(affineFromFloat(inst.staticTransform), inv);
+                for (int r = 0; r < 3; ++r)
+                    for (int c = 0; c < 4; ++c) rec.base.worldToObject[r][c] = float(inv.m[r][c]);
+            } else {
+                rec.base.motionType = inst.type;
+                std::memcpy(rec.motion, inst.motion, sizeof rec.motion);
+                if (inst.type == motion::kMatrix) std::memset(rec.motion + 24, 0, 8 * sizeof(float));
+                motion::instanceTransformsAt(rec.base, 0.0f, rec.base.objectToWorld, rec.base.worldToObject);
+            }
+            rec.base.customIndexAndMask = inst.customIndexAndMask;
+            rec.base.sbtOffsetAndFlags = inst.sbtOffsetAndFlags;
+            rec.base.reference = inst.reference;
+            rec.base.instanceId = i;
+            // The bottom level's bounds; an empty one is a point at the object-space origin (degenerate instance).
+            const Header* h = header(blas);
+            double boxLo[3] = {0, 0, 0}, boxHi[3] = {0, 0, 0};
+            if (h->bounds[0] <= h->bounds[3] && h->bounds[1] <= h->bounds[4] && h->bounds[2] <= h->bounds[5])
+                for (int c = 0; c < 3; ++c) boxLo[c] = h->bounds[c], boxHi[c] = h->bounds[3 + c];
+            double lo[3], hi[3];
+            motion::instanceBounds(inst.type, inst.staticTransform, inst.motion, boxLo, boxHi, lo, hi);
+            Aabb b;
+            b.lower = {roundDown(lo[0]), roundDown(lo[1]), roundDown(lo[2])};
+            b.upper = {roundUp(hi[0]), roundUp(hi[1]), roundUp(hi[2])};
+            temp[n] = rec;
+            setRef(refs[n], n, b);
+            ++n;
+        }
+    }
+    StructureLayout pre = structureLayout(StructureType::TopLevel, info.geometryCount, 0, 0, true);
+    auto* nodes = reinterpret_cast<Node*>(job.dst + pre.nodeOffset);
+    BvhBuildResult tree = buildWideBvh(refs, n, {maxLeafSize(StructureType::TopLevel)}, nodes);
+    StructureLayout layout = structureLayout(StructureType::TopLevel, info.geometryCount, tree.nodeCount, n, true);
+    auto* records = reinterpret_cast<MotionInstanceRecord*>(job.dst + layout.recordOffset);
+    for (uint32_t i = 0; i < n; ++i) records[i] = temp[refs[i].index];
+    writeGeometryDescs(job.dst, job);
+    clearGaps(job.dst, info.geometryCount, tree.nodeCount, layout);
+    writeHeader(job.dst, StructureType::TopLevel, VK_GEOMETRY_TYPE_INSTANCES_KHR, info, total, tree, n, layout);
+    return VK_SUCCESS;
+}
+
 VkResult buildTopLevel(const BuildJob& job) {
     const auto& info = *job.info;
+    if (motion::isMotionBuild(info.flags)) return buildMotionTopLevel(job);
     uint64_t total = info.geometryCount ? job.ranges[0].primitiveCount : 0;
     auto worst = structureSizes(StructureType::TopLevel, info.geometryCount, total);
     if (worst.structureSize > job.dstSize) return VK_ERROR_UNKNOWN;

@@ -24,6 +24,11 @@ struct BuildJob {
 const VkAccelerationStructureGeometryKHR& buildGeometry(const VkAccelerationStructureBuildGeometryInfoKHR& info,
                                                         uint32_t i);
 
+// [NV-motion] Whether a build stores motion records: built with VK_BUILD_ACCELERATION_STRUCTURE_MOTION_BIT_NV and a
+// top level, or a bottom level of triangles (motion AABBs keep their ordinary records: only the application's
+// intersection code knows how a box moves).
+bool usesMotionRecords(const VkAccelerationStructureBuildGeometryInfoKHR& info);
+
 // Returns VK_SUCCESS, or VK_ERROR_UNKNOWN when the destination cannot hold the result (nothing written then).
 VkResult buildAccelerationStructure(const BuildJob& job);
 

@@ -8,7 +8,10 @@ namespace {
 constexpr uint64_t alignUp(uint64_t v, uint64_t a) { return (v + a - 1) / a * a; }
 }  // namespace
 
-uint64_t recordSize(format::StructureType type) {
+uint64_t recordSize(format::StructureType type, bool motion) {
+    if (motion)
+        return type == format::StructureType::TopLevel ? sizeof(format::MotionInstanceRecord)
+                                                       : sizeof(format::MotionTriangleRecord);
     // Triangle and AABB records have the same size (format.hpp asserts it).
     return type == format::StructureType::TopLevel ? sizeof(format::InstanceRecord) : sizeof(format::TriangleRecord);
 }
@@ -18,21 +21,22 @@ uint32_t maxLeafSize(format::StructureType type) {
 }
 
 StructureLayout structureLayout(format::StructureType type, uint32_t geometryCount, uint64_t nodeCount,
-                                uint64_t recordCount) {
+                                uint64_t recordCount, bool motion) {
     StructureLayout l;
     l.geometryOffset = sizeof(format::Header);
     l.nodeOffset = alignUp(l.geometryOffset + uint64_t(geometryCount) * sizeof(format::GeometryDesc), 64);
     l.recordOffset = alignUp(l.nodeOffset + nodeCount * sizeof(format::Node), 64);
-    l.end = l.recordOffset + recordCount * recordSize(type);
+    l.end = l.recordOffset + recordCount * recordSize(type, motion);
     return l;
 }
 
-StructureSizes structureSizes(format::StructureType type, uint32_t geometryCount, uint64_t primitiveCount) {
+StructureSizes structureSizes(format::StructureType type, uint32_t geometryCount, uint64_t primitiveCount,
+                              bool motion) {
     StructureSizes s;
     uint64_t nodes = maxWideNodeCount(primitiveCount, maxLeafSize(type));
-    s.structureSize = structureLayout(type, geometryCount, nodes, primitiveCount).end;
+    s.structureSize = structureLayout(type, geometryCount, nodes, primitiveCount, motion).end;
     s.buildScratchSize =
-        primitiveCount == 0 ? 0 : kScratchAlignment + primitiveCount * (sizeof(PrimRef) + recordSize(type));
+        primitiveCount == 0 ? 0 : kScratchAlignment + primitiveCount * (sizeof(PrimRef) + recordSize(type, motion));
     s.updateScratchSize = s.buildScratchSize;  // an update rebuilds from its inputs for now
     return s;
 }

@@ -57,7 +57,8 @@ struct Header {
     uint64_t geometryOffset;
     uint64_t nodeOffset;
     uint64_t recordOffset;
-    // VkGeometryTypeKHR of the records: TRIANGLES (0), AABBS (1) or INSTANCES (2). A bottom-level structure holds
+    // VkGeometryTypeKHR of the records: TRIANGLES (0), AABBS (1), INSTANCES (2), SPHERES_NV (1000429004) or
+    // LINEAR_SWEPT_SPHERES_NV (1000429005). A bottom-level structure holds
     // one geometry type only (VUID 03792), so traversal branches on it once per instance, not per record.
     uint32_t primitiveType;
     uint8_t reserved[256 - 100];
@@ -113,6 +114,37 @@ struct AabbRecord {
 // Same size as a triangle record, so the build-size formula holds for both kinds of bottom-level structure.
 static_assert(sizeof(AabbRecord) == sizeof(TriangleRecord));
 
+// [NV-LSS] Sphere and linear-swept-sphere record flags: bits 0 and 2 as for triangles, plus the end caps of an LSS.
+constexpr uint32_t kSweptOpaque = kTriangleOpaque;
+constexpr uint32_t kSweptNoDuplicateAnyHit = kTriangleNoDuplicateAnyHit;
+constexpr uint32_t kLssCap0 = 0x10;  // the sphere at the first endpoint (u = 0) is a surface of the primitive
+constexpr uint32_t kLssCap1 = 0x20;  // the sphere at the second endpoint (u = 1)
+
+// One active sphere (VK_GEOMETRY_TYPE_SPHERES_NV): the decoded position (rounded to float) and radius.
+struct SphereRecord {
+    float center[3];
+    float radius;
+    uint32_t geometryIndex;
+    uint32_t primitiveIndex;
+    uint32_t flags;
+    uint32_t reserved[5];
+};
+static_assert(sizeof(SphereRecord) == sizeof(TriangleRecord));
+
+// One active linear swept sphere (VK_GEOMETRY_TYPE_LINEAR_SWEPT_SPHERES_NV): endpoints and radii in application
+// order, and which end caps the end-caps mode leaves on.
+struct LssRecord {
+    float p0[3];
+    float r0;
+    float p1[3];
+    float r1;
+    uint32_t geometryIndex;
+    uint32_t primitiveIndex;
+    uint32_t flags;
+    uint32_t reserved;
+};
+static_assert(sizeof(LssRecord) == sizeof(TriangleRecord));
+
 struct InstanceRecord {
     float objectToWorld[3][4];
     float worldToObject[3][4];
@@ -120,9 +152,34 @@ struct InstanceRecord {
     uint32_t sbtOffsetAndFlags;   // bits 0-23 SBT record offset, 24-31 VkGeometryInstanceFlagsKHR
     uint64_t reference;           // the VkAccelerationStructureKHR handle of the bottom-level structure
     uint32_t instanceId;          // index in the instance array given to the build
-    uint32_t reserved[3];
+    uint32_t motionType;          // motion top level: VkAccelerationStructureMotionInstanceTypeNV (0 static); else 0
+    uint32_t reserved[2];
 };
 static_assert(sizeof(InstanceRecord) == 128);
+
+// [NV-motion] Records of structures built with VK_BUILD_ACCELERATION_STRUCTURE_MOTION_BIT_NV (buildFlags in the
+// header tells them apart; traversal branches once per structure). See docs/FORMAT.md and engine/motion.hpp.
+//
+// A motion top level stores one MotionInstanceRecord per active instance. `base` is an ordinary instance record:
+// for a static motion instance its transforms are the instance's; for matrix and SRT motion they are the
+// transform at time 0 and its inverse (informative), and `base.motionType` selects how `motion` interpolates:
+//   MATRIX (1): motion[0..11] transformT0, motion[12..23] transformT1 (3x4 row-major), the rest zero
+//   SRT (2):    motion[0..15] transformT0, motion[16..31] transformT1 (VkSRTDataNV order)
+struct MotionInstanceRecord {
+    InstanceRecord base;
+    float motion[32];
+};
+static_assert(sizeof(MotionInstanceRecord) == 256);
+
+// A motion bottom level of triangles stores MotionTriangleRecords: `base` holds the time-0 positions (flags has
+// kTriangleMotion) and v1 the time-1 positions; traversal interpolates linearly.
+constexpr uint32_t kTriangleMotion = 0x8;
+struct MotionTriangleRecord {
+    TriangleRecord base;
+    float v1[3][3];
+    uint32_t reserved[3];
+};
+static_assert(sizeof(MotionTriangleRecord) == 96);
 
 inline const Header* header(const std::byte* base) { return reinterpret_cast<const Header*>(base); }
 inline const GeometryDesc* geometries(const std::byte* base) {
@@ -137,8 +194,20 @@ inline const TriangleRecord* triangles(const std::byte* base) {
 inline const AabbRecord* aabbs(const std::byte* base) {
     return reinterpret_cast<const AabbRecord*>(base + header(base)->recordOffset);
 }
+inline const SphereRecord* spheres(const std::byte* base) {
+    return reinterpret_cast<const SphereRecord*>(base + header(base)->recordOffset);
+}
+inline const LssRecord* lssRecords(const std::byte* base) {
+    return reinterpret_cast<const LssRecord*>(base + header(base)->recordOffset);
+}
 inline const InstanceRecord* instances(const std::byte* base) {
     return reinterpret_cast<const InstanceRecord*>(base + header(base)->recordOffset);
+}
+inline const MotionInstanceRecord* motionInstances(const std::byte* base) {
+    return reinterpret_cast<const MotionInstanceRecord*>(base + header(base)->recordOffset);
+}
+inline const MotionTriangleRecord* motionTriangles(const std::byte* base) {
+    return reinterpret_cast<const MotionTriangleRecord*>(base + header(base)->recordOffset);
 }
 
 }  // namespace vkas::format

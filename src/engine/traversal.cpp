@@ -4,6 +4,10 @@
 #include <cstring>
 
 #include "engine/aabb_intersect.hpp"
+#include "engine/motion.hpp"
+#include "engine/lss_intersect.hpp"
+#include "engine/sphere_intersect.hpp"
+#include "vkas/vkas_compat.h"
 
 #if defined(__SSE2__)
 #include <emmintrin.h>
@@ -125,17 +129,16 @@ void visitNode(RayQueryState& q, const Node& node, const ShearedRay& r) {
     for (uint32_t k = 0; k < hits; ++k) push(q, ref[k], dist[k]);
 }
 
-void transformRay(const InstanceRecord& inst, const float o[3], const float d[3], float oo[3], float od[3]) {
-    const float(*m)[4] = inst.worldToObject;
+void transformRay(const float (*m)[4], const float o[3], const float d[3], float oo[3], float od[3]) {
     for (int r = 0; r < 3; ++r) {
         oo[r] = float(double(m[r][0]) * o[0] + double(m[r][1]) * o[1] + double(m[r][2]) * o[2] + double(m[r][3]));
         od[r] = float(double(m[r][0]) * d[0] + double(m[r][1]) * d[1] + double(m[r][2]) * d[2]);
     }
 }
 
-void enterInstance(RayQueryState& q, const InstanceRecord& inst) {
-    const uint32_t mask = inst.customIndexAndMask >> 24;
-    if ((mask & q.cullMask & 0xFFu) == 0) return;
+// Enters `inst` with the world-to-object transform `worldToObject` (the record's own, or [NV-motion] the one
+// interpolated at the ray time).
+void enterInstanceWith(RayQueryState& q, const InstanceRecord& inst, const float (*worldToObject)[4]) {
     const std::byte* blas = q.resolver ? q.resolver(inst.reference) : nullptr;
     if (!blas) return;
     const Header* h = header(blas);
@@ -144,15 +147,40 @@ void enterInstance(RayQueryState& q, const InstanceRecord& inst) {
     const bool aabbs = h->primitiveType == VK_GEOMETRY_TYPE_AABBS_KHR;
     if (q.flags & (aabbs ? kRaySkipAabbs : kRaySkipTriangles)) return;
     float oo[3], od[3];
-    transformRay(inst, q.worldOrigin, q.worldDirection, oo, od);
+    transformRay(worldToObject, q.worldOrigin, q.worldDirection, oo, od);
     prepareShearedRay(q.objectRay, oo, od);
     q.instance = &inst;
     q.bottomLevel = blas;
     q.bottomLevelAabbs = aabbs;
+    q.bottomLevelMotion =
+        h->primitiveType == VK_GEOMETRY_TYPE_TRIANGLES_KHR && motion::isMotionBuild(h->buildFlags);
+    q.bottomLevelSwept = (h->primitiveType == VK_GEOMETRY_TYPE_SPHERES_NV ||
+                          h->primitiveType == VK_GEOMETRY_TYPE_LINEAR_SWEPT_SPHERES_NV)
+                             ? h->primitiveType
+                             : 0u;
     q.inBottomLevel = true;
     q.topLevelStackBase = q.sp;
     q.bottomLeafNext = q.bottomLeafEnd = 0;
     push(q, h->root, q.tMin);
+}
+
+void enterInstance(RayQueryState& q, const InstanceRecord& inst) {
+    if (((inst.customIndexAndMask >> 24) & q.cullMask & 0xFFu) == 0) return;
+    enterInstanceWith(q, inst, inst.worldToObject);
+}
+
+// [NV-motion] An instance of a motion top level: static ones as usual, matrix and SRT motion ones with their
+// transform at the ray time (computed only after the mask test).
+void enterMotionInstance(RayQueryState& q, const MotionInstanceRecord& rec) {
+    const InstanceRecord& inst = rec.base;
+    if (((inst.customIndexAndMask >> 24) & q.cullMask & 0xFFu) == 0) return;
+    if (inst.motionType == motion::kStatic) {
+        enterInstanceWith(q, inst, inst.worldToObject);
+        return;
+    }
+    float objectToWorld[3][4], worldToObject[3][4];
+    motion::instanceTransformsAt(inst, q.time, objectToWorld, worldToObject);
+    enterInstanceWith(q, inst, worldToObject);
 }
 
 enum class TriangleOutcome { None, Committed, Candidate };
@@ -164,10 +192,11 @@ void commit(RayQueryState& q, const QueryHit& hit, uint32_t type) {
     if (q.flags & kRayTerminateOnFirstHit) q.done = true;
 }
 
-TriangleOutcome testTriangle(RayQueryState& q, const TriangleRecord& tri) {
+// Tests `tri` with the positions `v` (the record's own, or [NV-motion] the ones interpolated at the ray time).
+TriangleOutcome testTriangle(RayQueryState& q, const TriangleRecord& tri, const float (*v)[3]) {
     if (tri.flags & kTriangleDegenerate) return TriangleOutcome::None;
     TriangleHit th;
-    if (!intersectTriangle(q.objectRay, tri.v[0], tri.v[1], tri.v[2], th)) return TriangleOutcome::None;
+    if (!intersectTriangle(q.objectRay, v[0], v[1], v[2], th)) return TriangleOutcome::None;
     if (!(th.t > q.tMin && th.t < q.tMax)) return TriangleOutcome::None;  // strict for triangles
     const uint32_t instanceFlags = q.instance->sbtOffsetAndFlags >> 24;
     bool front = th.frontFace;
@@ -189,6 +218,9 @@ TriangleOutcome testTriangle(RayQueryState& q, const TriangleRecord& tri) {
     c.instance = q.instance;
     c.triangle = &tri;
     c.aabb = nullptr;
+    c.sphere = nullptr;
+    c.lss = nullptr;
+    c.lssHitValue = 0.0f;
     std::memcpy(c.objectOrigin, q.objectRay.org, sizeof c.objectOrigin);
     std::memcpy(c.objectDirection, q.objectRay.dir, sizeof c.objectDirection);
     if (opaque) {
@@ -200,10 +232,26 @@ TriangleOutcome testTriangle(RayQueryState& q, const TriangleRecord& tri) {
 }
 
 // Tests the rest of the current triangle leaf. Returns true when a candidate needs the application.
+// [NV-motion] The rest of the current leaf of a motion bottom level: positions interpolated at the ray time.
+bool visitMotionTriangleLeaf(RayQueryState& q) {
+    const MotionTriangleRecord* records = motionTriangles(q.bottomLevel);
+    while (q.bottomLeafNext < q.bottomLeafEnd) {
+        const MotionTriangleRecord& rec = records[q.bottomLeafNext++];
+        float v[3][3];
+        for (int j = 0; j < 3; ++j)
+            for (int c = 0; c < 3; ++c) v[j][c] = motion::lerp(rec.base.v[j][c], rec.v1[j][c], q.time);
+        if (testTriangle(q, rec.base, v) == TriangleOutcome::Candidate) return true;
+        if (q.done) return false;
+    }
+    return false;
+}
+
 bool visitTriangleLeaf(RayQueryState& q) {
+    if (q.bottomLevelMotion) return visitMotionTriangleLeaf(q);  // once per leaf, not per triangle
     const TriangleRecord* records = triangles(q.bottomLevel);
     while (q.bottomLeafNext < q.bottomLeafEnd) {
-        if (testTriangle(q, records[q.bottomLeafNext++]) == TriangleOutcome::Candidate) return true;
+        const TriangleRecord& tri = records[q.bottomLeafNext++];
+        if (testTriangle(q, tri, tri.v) == TriangleOutcome::Candidate) return true;
         if (q.done) return false;  // an opaque hit with TerminateOnFirstHit
     }
     return false;
@@ -226,6 +274,9 @@ bool testAabb(RayQueryState& q, const AabbRecord& box) {
     c.instance = q.instance;
     c.triangle = nullptr;
     c.aabb = &box;
+    c.sphere = nullptr;
+    c.lss = nullptr;
+    c.lssHitValue = 0.0f;
     std::memcpy(c.objectOrigin, q.objectRay.org, sizeof c.objectOrigin);
     std::memcpy(c.objectDirection, q.objectRay.dir, sizeof c.objectDirection);
     q.candidatePending = true;
@@ -240,11 +291,71 @@ bool visitAabbLeaf(RayQueryState& q) {
     return false;
 }
 
+// [NV-LSS] Spheres and linear swept spheres are built-in primitives: like triangles, opaque ones commit at once
+// and non-opaque ones go back to the application as triangle-type candidates. Facing culls do not apply (they
+// are for triangles); SkipTriangles (SkipBuiltinPrimitivesNV) skipped the whole instance in enterInstance.
+TriangleOutcome testSwept(RayQueryState& q, const SphereRecord* sphere, const LssRecord* lss) {
+    float t, u = 0.0f;
+    uint32_t recordFlags;
+    if (sphere) {
+        if (!intersectSphere(q.objectRay.org, q.objectRay.dir, sphere->center, sphere->radius, q.tMin, q.tMax, t))
+            return TriangleOutcome::None;
+        recordFlags = sphere->flags;
+    } else {
+        uint32_t caps = ((lss->flags & kLssCap0) ? kLssCapBit0 : 0u) | ((lss->flags & kLssCap1) ? kLssCapBit1 : 0u);
+        if (!intersectLss(q.objectRay.org, q.objectRay.dir, lss->p0, lss->r0, lss->p1, lss->r1, caps, q.tMin, q.tMax,
+                          t, u))
+            return TriangleOutcome::None;
+        recordFlags = lss->flags;
+    }
+    const uint32_t instanceFlags = q.instance->sbtOffsetAndFlags >> 24;
+    const bool opaque = resolveOpacity((recordFlags & kSweptOpaque) != 0, instanceFlags, q.flags);
+    if (culledByOpacity(opaque, q.flags)) return TriangleOutcome::None;
+
+    QueryHit& c = q.candidate;
+    c.type = kCandidateTriangle;
+    c.t = t;
+    c.barycentrics[0] = c.barycentrics[1] = 0.0f;
+    c.frontFace = false;
+    c.aabbOpaque = false;
+    c.instance = q.instance;
+    c.triangle = nullptr;
+    c.aabb = nullptr;
+    c.sphere = sphere;
+    c.lss = lss;
+    c.lssHitValue = u;
+    std::memcpy(c.objectOrigin, q.objectRay.org, sizeof c.objectOrigin);
+    std::memcpy(c.objectDirection, q.objectRay.dir, sizeof c.objectDirection);
+    if (opaque) {
+        commit(q, c, kCommittedTriangle);
+        return TriangleOutcome::Committed;
+    }
+    q.candidatePending = true;
+    return TriangleOutcome::Candidate;
+}
+
+// Tests the rest of the current sphere or LSS leaf. Returns true when a candidate needs the application.
+bool visitSweptLeaf(RayQueryState& q) {
+    const bool isSphere = q.bottomLevelSwept == VK_GEOMETRY_TYPE_SPHERES_NV;
+    while (q.bottomLeafNext < q.bottomLeafEnd) {
+        const uint64_t i = q.bottomLeafNext++;
+        const TriangleOutcome r = isSphere ? testSwept(q, &spheres(q.bottomLevel)[i], nullptr)
+                                           : testSwept(q, nullptr, &lssRecords(q.bottomLevel)[i]);
+        if (r == TriangleOutcome::Candidate) return true;
+        if (q.done) return false;
+    }
+    return false;
+}
+
 }  // namespace
 
 void queryInitialize(RayQueryState& q, const std::byte* topLevel, BlasResolver resolver, uint32_t rayFlags,
-                     uint32_t cullMask, const float origin[3], float tMin, const float direction[3], float tMax) {
+                     uint32_t cullMask, const float origin[3], float tMin, const float direction[3], float tMax,
+                     float time) {
     std::memcpy(q.worldOrigin, origin, sizeof q.worldOrigin);
+    q.time = time;
+    q.topLevelMotion = false;
+    q.bottomLevelMotion = false;
     std::memcpy(q.worldDirection, direction, sizeof q.worldDirection);
     q.tMin = tMin;
     q.tMax = tMax;
@@ -262,6 +373,7 @@ void queryInitialize(RayQueryState& q, const std::byte* topLevel, BlasResolver r
     q.instance = nullptr;
     q.bottomLevel = nullptr;
     q.bottomLevelAabbs = false;
+    q.bottomLevelSwept = 0;
     resetHit(q.candidate, tMax);
     resetHit(q.committed, tMax);
     prepareShearedRay(q.worldRay, origin, direction);
@@ -270,6 +382,7 @@ void queryInitialize(RayQueryState& q, const std::byte* topLevel, BlasResolver r
         q.done = true;  // a null acceleration structure: every ray misses
         return;
     }
+    q.topLevelMotion = motion::isMotionBuild(h->buildFlags);
     push(q, h->root, tMin);
 }
 
@@ -278,7 +391,10 @@ bool queryProceed(RayQueryState& q) {
     while (!q.done) {
         if (q.inBottomLevel) {
             if (q.bottomLeafNext < q.bottomLeafEnd) {
-                if (q.bottomLevelAabbs ? visitAabbLeaf(q) : visitTriangleLeaf(q)) return true;
+                if (q.bottomLevelAabbs    ? visitAabbLeaf(q)
+                    : q.bottomLevelSwept ? visitSweptLeaf(q)
+                                         : visitTriangleLeaf(q))
+                    return true;
                 continue;
             }
             if (q.sp == q.topLevelStackBase) {
@@ -287,7 +403,10 @@ bool queryProceed(RayQueryState& q) {
             }
         } else {
             if (q.topLeafNext < q.topLeafEnd) {
-                enterInstance(q, instances(q.topLevel)[q.topLeafNext++]);
+                if (q.topLevelMotion)  // [NV-motion]: once per instance
+                    enterMotionInstance(q, motionInstances(q.topLevel)[q.topLeafNext++]);
+                else
+                    enterInstance(q, instances(q.topLevel)[q.topLeafNext++]);
                 continue;
             }
             if (q.sp == 0) {

@@ -24,16 +24,29 @@ struct QueryHit {
     const format::InstanceRecord* instance;  // null for no hit
     const format::TriangleRecord* triangle;  // triangle candidates and hits
     const format::AabbRecord* aabb;          // AABB candidates and generated hits
+    // [NV-LSS] Sphere and LSS candidates and hits. They report the triangle intersection types (as SPIR-V does)
+    // and are told apart by these pointers (OpRayQueryIsSphereHitNV / OpRayQueryIsLSSHitNV).
+    const format::SphereRecord* sphere;
+    const format::LssRecord* lss;
+    float lssHitValue;  // u along the LSS (0 or 1 on an end cap); 0 for everything else
     float objectOrigin[3];
     float objectDirection[3];
 };
 
 // Geometry and primitive index of a hit, -1 without one.
 inline int32_t hitGeometryIndex(const QueryHit& h) {
-    return h.triangle ? int32_t(h.triangle->geometryIndex) : h.aabb ? int32_t(h.aabb->geometryIndex) : -1;
+    return h.triangle ? int32_t(h.triangle->geometryIndex)
+           : h.aabb   ? int32_t(h.aabb->geometryIndex)
+           : h.sphere ? int32_t(h.sphere->geometryIndex)
+           : h.lss    ? int32_t(h.lss->geometryIndex)
+                      : -1;
 }
 inline int32_t hitPrimitiveIndex(const QueryHit& h) {
-    return h.triangle ? int32_t(h.triangle->primitiveIndex) : h.aabb ? int32_t(h.aabb->primitiveIndex) : -1;
+    return h.triangle ? int32_t(h.triangle->primitiveIndex)
+           : h.aabb   ? int32_t(h.aabb->primitiveIndex)
+           : h.sphere ? int32_t(h.sphere->primitiveIndex)
+           : h.lss    ? int32_t(h.lss->primitiveIndex)
+                      : -1;
 }
 
 // Each wide level pushes at most 7 siblings; two levels (top and bottom) share the stack.
@@ -59,6 +72,12 @@ struct RayQueryState {
     const format::InstanceRecord* instance;
     const std::byte* bottomLevel;
     bool bottomLevelAabbs;  // the current bottom-level structure holds AABBs, not triangles
+    // [NV-motion] The ray time in [0, 1] (0 without one), and whether the top level / the current bottom level
+    // store motion records (format::MotionInstanceRecord / format::MotionTriangleRecord).
+    float time;
+    bool topLevelMotion;
+    bool bottomLevelMotion;
+    uint32_t bottomLevelSwept;  // [NV-LSS] 0, or SPHERES_NV / LINEAR_SWEPT_SPHERES_NV for such a structure
 
     QueryHit candidate, committed;
 
@@ -67,7 +86,8 @@ struct RayQueryState {
 };
 
 void queryInitialize(RayQueryState& q, const std::byte* topLevel, BlasResolver resolver, uint32_t rayFlags,
-                     uint32_t cullMask, const float origin[3], float tMin, const float direction[3], float tMax);
+                     uint32_t cullMask, const float origin[3], float tMin, const float direction[3], float tMax,
+                     float time = 0.0f);
 bool queryProceed(RayQueryState& q);
 void queryConfirm(RayQueryState& q);
 // Commits the pending AABB candidate at tHit. Does nothing without one, or when tHit is outside

@@ -160,6 +160,13 @@ void Blas::computeBounds() {
                 for (const Vec3& v : t.v) extend(v);
         for (const Aabb& b : g.aabbs)
             if (b.valid()) extend(b.lo), extend(b.hi);
+        for (const SweptPrimitive& sp : g.swept)
+            if (sp.hittable())
+                for (int e = 0; e < 2; ++e)
+                    for (int k = 0; k < 3; ++k) {
+                        lo[k] = std::min(lo[k], sp.p[e][k] - sp.r[e]);
+                        hi[k] = std::max(hi[k], sp.p[e][k] + sp.r[e]);
+                    }
     }
 }
 
@@ -236,6 +243,9 @@ Geometry fetchAabbs(const VkAccelerationStructureGeometryKHR& geometry,
 
 Geometry fetchGeometry(const VkAccelerationStructureGeometryKHR& geometry,
                        const VkAccelerationStructureBuildRangeInfoKHR& range) {
+    if (geometry.geometryType == VK_GEOMETRY_TYPE_SPHERES_NV ||
+        geometry.geometryType == VK_GEOMETRY_TYPE_LINEAR_SWEPT_SPHERES_NV)
+        return fetchSweptSpheres(geometry, range);
     return geometry.geometryType == VK_GEOMETRY_TYPE_AABBS_KHR ? fetchAabbs(geometry, range)
                                                                 : fetchTriangles(geometry, range);
 }
@@ -431,7 +441,19 @@ Result trace(const Scene& scene, const Ray& ray, uint32_t rayFlags, uint32_t cul
                 }
                 continue;
             }
-            if (rayFlags & kRaySkipTriangles) continue;
+            if (rayFlags & kRaySkipTriangles) continue;  // SkipBuiltinPrimitivesNV: spheres and LSS too
+            if (geom.type == VK_GEOMETRY_TYPE_SPHERES_NV || geom.type == VK_GEOMETRY_TYPE_LINEAR_SWEPT_SPHERES_NV) {
+                Candidate proto;
+                proto.instanceId = int32_t(id);
+                proto.geometryIndex = int32_t(gi);
+                proto.customIndex = inst.customIndex;
+                proto.sbtOffset = inst.sbtOffset;
+                proto.opaque = opaque;
+                const double cond = maxAbs(d) > 0 ? std::max(1.0, minv * maxAbs(dw) / maxAbs(d)) : 1.0;
+                for (int k = 0; k < 3; ++k) proto.objectOrigin[k] = o[k], proto.objectDirection[k] = d[k];
+                sweptCandidates(geom, o, d, tMin, tMax, originScale * cond, proto, result.candidates);
+                continue;
+            }
             for (size_t pi = 0; pi < geom.triangles.size(); ++pi) {
                 const Triangle& tri = geom.triangles[pi];
                 if (!tri.active) continue;
@@ -512,6 +534,121 @@ Result trace(const Scene& scene, const Ray& ray, uint32_t rayFlags, uint32_t cul
         }
     }
     return result;
+}
+
+// ---- [NV-motion] -------------------------------------------------------------------------------------------------
+Geometry fetchTrianglesAtTime1(const VkAccelerationStructureGeometryKHR& geometry,
+                               const VkAccelerationStructureBuildRangeInfoKHR& range) {
+    VkAccelerationStructureGeometryKHR g = geometry;
+    for (auto* p = static_cast<const VkBaseInStructure*>(geometry.geometry.triangles.pNext); p; p = p->pNext)
+        if (p->sType == VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_GEOMETRY_MOTION_TRIANGLES_DATA_NV)
+            g.geometry.triangles.vertexData =
+                reinterpret_cast<const VkAccelerationStructureGeometryMotionTrianglesDataNV*>(p)->vertexData;
+    return fetchTriangles(g, range);
+}
+
+std::shared_ptr<const Blas> blasAt(const std::shared_ptr<const Blas>& blas, double time) {
+    if (!blas || !blas->atTime1) return blas;
+    auto out = std::make_shared<Blas>();
+    out->geometries = blas->geometries;
+    for (size_t g = 0; g < out->geometries.size(); ++g) {
+        auto& tris = out->geometries[g].triangles;
+        const auto& later = blas->atTime1->geometries[g].triangles;
+        for (size_t i = 0; i < tris.size(); ++i) {
+            tris[i].active = tris[i].active && later[i].active;
+            for (int j = 0; j < 3; ++j)
+                for (int k = 0; k < 3; ++k) tris[i].v[j][k] += time * (later[i].v[j][k] - tris[i].v[j][k]);
+        }
+    }
+    out->computeBounds();
+    return out;
+}
+
+namespace {
+// Rotation of v by the unit quaternion (x, y, z, w): v + 2w (q x v) + 2 q x (q x v).
+Vec3 rotate(const double q[4], const Vec3& v) {
+    const Vec3 u{q[0], q[1], q[2]};
+    const Vec3 c1 = cross(u, v);
+    const Vec3 c2 = cross(u, c1);
+    Vec3 r;
+    for (int k = 0; k < 3; ++k) r[k] = v[k] + 2.0 * q[3] * c1[k] + 2.0 * c2[k];
+    return r;
+}
+}  // namespace
+
+void srtMatrix(const double p[16], double out[3][4]) {
+    // S maps object space: columns of S are its images of the basis vectors and of the origin.
+    const double S[3][4] = {{p[0], p[1], p[2], p[3]}, {0, p[4], p[5], p[6]}, {0, 0, p[7], p[8]}};
+    double q[4] = {p[9], p[10], p[11], p[12]};
+    const double len = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+    if (len > 0) {
+        for (double& c : q) c /= len;
+    } else {
+        q[0] = q[1] = q[2] = 0, q[3] = 1;
+    }
+    for (int col = 0; col < 4; ++col) {
+        const Vec3 r = rotate(q, {S[0][col], S[1][col], S[2][col]});
+        for (int row = 0; row < 3; ++row) out[row][col] = r[row] + (col == 3 ? p[13 + row] : 0.0);
+    }
+}
+
+MotionInstance decodeMotionInstance(uint32_t type, const void* payload,
+                                    const std::function<std::shared_ptr<const Blas>(uint64_t)>& lookup) {
+    const uint8_t* p = static_cast<const uint8_t*>(payload);
+    MotionInstance m;
+    m.type = type;
+    size_t words = 48;  // static: VkAccelerationStructureInstanceKHR
+    if (type == 0) {
+        for (int r = 0; r < 3; ++r)
+            for (int c = 0; c < 4; ++c) m.transform0[r][c] = m.transform1[r][c] = load<float>(p + 4 * (4 * r + c));
+    } else if (type == 1) {  // VkAccelerationStructureMatrixMotionInstanceNV
+        for (int r = 0; r < 3; ++r)
+            for (int c = 0; c < 4; ++c) {
+                m.transform0[r][c] = load<float>(p + 4 * (4 * r + c));
+                m.transform1[r][c] = load<float>(p + 48 + 4 * (4 * r + c));
+            }
+        words = 96;
+    } else if (type == 2) {  // VkAccelerationStructureSRTMotionInstanceNV
+        for (int k = 0; k < 16; ++k) {
+            m.srt0[k] = load<float>(p + 4 * k);
+            m.srt1[k] = load<float>(p + 64 + 4 * k);
+        }
+        words = 128;
+    } else {
+        throw std::invalid_argument("oracle: bad motion instance type");
+    }
+    const uint32_t w0 = load<uint32_t>(p + words), w1 = load<uint32_t>(p + words + 4);
+    m.base.customIndex = w0 & 0xFFFFFFu;
+    m.base.mask = w0 >> 24;
+    m.base.sbtOffset = w1 & 0xFFFFFFu;
+    m.base.flags = w1 >> 24;
+    m.base.reference = load<uint64_t>(p + words + 8);
+    if (m.base.reference != 0) {
+        m.base.blas = lookup(m.base.reference);
+        if (!m.base.blas) throw std::invalid_argument("oracle: unknown acceleration structure reference");
+    }
+    return m;
+}
+
+Instance instanceAt(const MotionInstance& m, double time) {
+    Instance inst = m.base;
+    if (m.type == 2) {
+        double p[16];
+        for (int k = 0; k < 16; ++k) p[k] = (1.0 - time) * m.srt0[k] + time * m.srt1[k];
+        srtMatrix(p, inst.toWorld);
+    } else {
+        for (int r = 0; r < 3; ++r)
+            for (int c = 0; c < 4; ++c) inst.toWorld[r][c] = (1.0 - time) * m.transform0[r][c] + time * m.transform1[r][c];
+    }
+    invert34(inst.toWorld, inst.toObject);
+    inst.blas = blasAt(m.base.blas, time);
+    return inst;
+}
+
+Scene MotionScene::at(double time) const {
+    Scene s;
+    for (const MotionInstance& m : instances) s.instances.push_back(instanceAt(m, time));
+    return s;
 }
 
 }  // namespace oracle

@@ -3,6 +3,7 @@
 // build reads (geometry fetch + vertex decode) and tests every primitive of every instance for every ray.
 #pragma once
 
+#include <vkas/vkas_compat.h>  // VK_NV_ray_tracing_linear_swept_spheres on older headers
 #include <vulkan/vulkan_core.h>
 
 #include <array>
@@ -48,16 +49,29 @@ struct Aabb {
     bool active = true;
     bool valid() const { return active && lo[0] <= hi[0] && lo[1] <= hi[1] && lo[2] <= hi[2]; }
 };
+// [NV-LSS] A sphere (p[0] == p[1], r[0] == r[1], both caps) or a linear swept sphere: the union of the balls
+// centred on p[0] + s (p[1] - p[0]) with radius r[0] + s (r[1] - r[0]), s in [0, 1]. cap[k]: the end-caps mode
+// leaves the cap at endpoint k on. Inactive when a component of a position or radius is NaN; never hit when a
+// radius is negative (invalid input) or both are zero (degenerate).
+struct SweptPrimitive {
+    std::array<Vec3, 2> p{};  // as decoded, rounded to float
+    std::array<double, 2> r{0, 0};
+    std::array<bool, 2> cap{true, true};
+    bool active = true;
+    bool hittable() const { return active && r[0] >= 0 && r[1] >= 0 && (r[0] > 0 || r[1] > 0); }
+};
 struct Geometry {
     VkGeometryTypeKHR type = VK_GEOMETRY_TYPE_TRIANGLES_KHR;
     bool opaque = false;
     std::vector<Triangle> triangles;  // triangle geometries; index = primitive index
     std::vector<Aabb> aabbs;          // AABB geometries; index = primitive index
+    std::vector<SweptPrimitive> swept;  // sphere and LSS geometries; index = primitive index
 };
 struct Blas {
     std::vector<Geometry> geometries;  // index = geometry index
     Vec3 lo{0, 0, 0}, hi{-1, -1, -1};  // bounds of active triangles and valid AABBs (lo > hi: empty)
     void computeBounds();
+    std::shared_ptr<const Blas> atTime1;  // [NV-motion] the same geometry with the positions at time 1; null: static
 };
 
 // Fetches the triangles of one geometry exactly as the spec's fetch rules say (spec digest section 4).
@@ -66,7 +80,11 @@ Geometry fetchTriangles(const VkAccelerationStructureGeometryKHR& geometry,
 // Fetches the AABBs of one geometry: AABB i at data + primitiveOffset + i * stride.
 Geometry fetchAabbs(const VkAccelerationStructureGeometryKHR& geometry,
                     const VkAccelerationStructureBuildRangeInfoKHR& range);
-// Either of the two, by geometryType.
+// [NV-LSS] Fetches a sphere or LSS geometry (data in the geometry's pNext chain), written from the spec's range
+// rules (support/oracle_spheres.cpp).
+Geometry fetchSweptSpheres(const VkAccelerationStructureGeometryKHR& geometry,
+                           const VkAccelerationStructureBuildRangeInfoKHR& range);
+// Any of them, by geometryType.
 Geometry fetchGeometry(const VkAccelerationStructureGeometryKHR& geometry,
                        const VkAccelerationStructureBuildRangeInfoKHR& range);
 
@@ -110,7 +128,18 @@ struct Candidate {
     double tExit = 0;          // AABB candidates: where the ray leaves the box, clamped to tMax
     double baryTolerance = 0;  // absolute tolerance for comparing barycentrics
     double objectOrigin[3] = {0, 0, 0}, objectDirection[3] = {0, 0, 0};
+    // [NV-LSS] Sphere and LSS candidates (reported with the triangle intersection types; facingAmbiguous and an
+    // infinite baryTolerance). u: the LSS hit value (0 for spheres), within uTolerance.
+    VkGeometryTypeKHR sweptType = VK_GEOMETRY_TYPE_TRIANGLES_KHR;  // SPHERES_NV or LINEAR_SWEPT_SPHERES_NV
+    double u = 0, uTolerance = 0;
 };
+
+// [NV-LSS] Adds the candidates of one sphere/LSS geometry for the object-space ray o + t d (support/oracle_spheres.cpp):
+// the entry point into each shape (convex minimisation of the distance to the swept spheres, then bisection), no hit
+// when the ray starts inside or enters through an absent cap. `proto` carries the instance fields and opacity.
+// scale: the magnitude of the world/object coordinates involved, for the tolerance.
+void sweptCandidates(const Geometry& geometry, const Vec3& o, const Vec3& d, double tMin, double tMax, double scale,
+                     const Candidate& proto, std::vector<Candidate>& out);
 
 struct Result {
     // Every candidate that survives all culling (mask, skip, facing, opacity culling), required or optional.
@@ -130,5 +159,37 @@ bool boxInterval(const Vec3& o, const Vec3& d, const Vec3& lo, const Vec3& hi, d
 
 // rayFlags are the SPIR-V RayFlags bits; only the low 8 bits of cullMask are used.
 Result trace(const Scene& scene, const Ray& ray, uint32_t rayFlags, uint32_t cullMask);
+
+// ---- [NV-motion] VK_NV_ray_tracing_motion_blur --------------------------------------------------------------------
+// Motion is evaluated by turning the structures into the static ones they are at a time, then tracing those.
+//
+// Triangles at time 1: the geometry fetched again with VkAccelerationStructureGeometryMotionTrianglesDataNV's
+// vertexData (same format, stride, indexing and transform). A triangle is active when it is at both times.
+Geometry fetchTrianglesAtTime1(const VkAccelerationStructureGeometryKHR& geometry,
+                               const VkAccelerationStructureBuildRangeInfoKHR& range);
+// The BLAS at `time` (positions (1 - time) v0 + time v1, exact in double); a static BLAS is returned as is.
+std::shared_ptr<const Blas> blasAt(const std::shared_ptr<const Blas>& blas, double time);
+
+// One VkAccelerationStructureMotionInstanceNV: type 0 static (transform0), 1 matrix (transform0/1, interpolated
+// componentwise), 2 SRT (srt0/1: the 16 VkSRTDataNV values, interpolated componentwise, then T * R * S with the
+// interpolated quaternion normalized).
+struct MotionInstance {
+    uint32_t type = 0;
+    double transform0[3][4] = {}, transform1[3][4] = {};
+    double srt0[16] = {}, srt1[16] = {};
+    Instance base;  // ids, mask, flags, reference, BLAS (the transforms are filled in by instanceAt)
+};
+// Decodes the member of VkAccelerationStructureMotionInstanceDataNV that `type` names, at `payload`.
+MotionInstance decodeMotionInstance(uint32_t type, const void* payload,
+                                    const std::function<std::shared_ptr<const Blas>(uint64_t)>& lookup);
+// The object-to-world matrix T * R * S of 16 VkSRTDataNV values.
+void srtMatrix(const double srt[16], double out[3][4]);
+// The instance at `time`: its transform and inverse, and its BLAS at that time.
+Instance instanceAt(const MotionInstance& instance, double time);
+
+struct MotionScene {
+    std::vector<MotionInstance> instances;  // index = instance id
+    Scene at(double time) const;
+};
 
 }  // namespace oracle

@@ -365,6 +365,11 @@ AccelStruct* VkasTest::createAccelStruct(VkAccelerationStructureTypeKHR type, Vk
     ci.offset = opt.asOffset;
     ci.size = size;
     ci.type = opt.createGeneric ? VK_ACCELERATION_STRUCTURE_TYPE_GENERIC_KHR : type;
+    ci.createFlags = opt.createFlags;
+    VkAccelerationStructureMotionInfoNV motionInfo{VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_MOTION_INFO_NV};
+    motionInfo.maxInstances = opt.motionMaxInstances;
+    if ((opt.createFlags & VK_ACCELERATION_STRUCTURE_CREATE_MOTION_BIT_NV) && type == VK_ACCELERATION_STRUCTURE_TYPE_TOP_LEVEL_KHR)
+        ci.pNext = &motionInfo;
     EXPECT_EQ(vk.vkCreateAccelerationStructureKHR(device, &ci, nullptr, &as->handle), VK_SUCCESS);
     EXPECT_NE(as->handle, VK_NULL_HANDLE);
     if (opt.bindAfterCreate) bindBuffer(as->buffer, opt.memoryPoison);
@@ -589,6 +594,12 @@ QueryTrace VkasTest::query(VkAccelerationStructureKHR tlas, const oracle::Ray& r
         const bool hasCommitted = vkasRayQueryGetIntersectionType(&q, VK_TRUE) != VKAS_COMMITTED_INTERSECTION_NONE;
         const float curMax = hasCommitted ? vkasRayQueryGetIntersectionT(&q, VK_TRUE) : ray.tMax;
         out.candidates.push_back(c);
+        const uint32_t primitiveType = vkasRayQueryGetIntersectionPrimitiveType(&q, VK_FALSE);
+        if (c.type == VKAS_CANDIDATE_INTERSECTION_AABB ? primitiveType != VKAS_INTERSECTION_PRIMITIVE_AABB
+                                                       : primitiveType != VKAS_INTERSECTION_PRIMITIVE_TRIANGLE &&
+                                                             primitiveType != VKAS_INTERSECTION_PRIMITIVE_SPHERE &&
+                                                             primitiveType != VKAS_INTERSECTION_PRIMITIVE_LSS)
+            problems << "candidate primitive type " << primitiveType << " does not fit candidate type " << c.type << "; ";
         if (c.type == VKAS_CANDIDATE_INTERSECTION_TRIANGLE) {
             if (!(c.t > ray.tMin) || !(c.t <= curMax))
                 problems << "candidate t " << c.t << " outside (tMin " << ray.tMin << ", current tMax " << curMax << "]; ";
@@ -644,6 +655,18 @@ QueryTrace VkasTest::query(VkAccelerationStructureKHR tlas, const oracle::Ray& r
                      << after.str() << " vs " << c.str() << "); ";
     }
     out.committed = readHit(q, true);
+    const uint32_t committedPrimitive = vkasRayQueryGetIntersectionPrimitiveType(&q, VK_TRUE);
+    const bool fits = out.committed.type == VKAS_COMMITTED_INTERSECTION_NONE
+                          ? committedPrimitive == VKAS_INTERSECTION_PRIMITIVE_NONE
+                      : out.committed.type == VKAS_COMMITTED_INTERSECTION_GENERATED
+                          ? committedPrimitive == VKAS_INTERSECTION_PRIMITIVE_AABB
+                          : committedPrimitive != VKAS_INTERSECTION_PRIMITIVE_NONE &&
+                                committedPrimitive != VKAS_INTERSECTION_PRIMITIVE_AABB;
+    if (!fits)
+        problems << "committed primitive type " << committedPrimitive << " does not fit committed type "
+                 << out.committed.type << "; ";
+    if (vkasRayQueryGetIntersectionPrimitiveType(&q, VK_FALSE) != VKAS_INTERSECTION_PRIMITIVE_NONE)
+        problems << "a candidate primitive type after Proceed returned false; ";
     out.problems = problems.str();
     return out;
 }

@@ -124,6 +124,10 @@ struct BuildOptions {
     VkDeviceSize asOffset = 0;         // multiple of 256
     uint32_t extraMaxPrimitives = 0;   // the sizes query asks for this many more primitives per geometry
     uint32_t instancePrimitiveOffset = 0;  // TLAS: primitiveOffset of the instance data (multiple of 16)
+    // [NV-motion] createFlags of the structure; with CREATE_MOTION_BIT_NV a top level gets a
+    // VkAccelerationStructureMotionInfoNV with motionMaxInstances in its pNext chain.
+    VkAccelerationStructureCreateFlagsKHR createFlags = 0;
+    uint32_t motionMaxInstances = 0;
 };
 
 struct Instance {
