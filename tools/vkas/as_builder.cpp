@@ -1,6 +1,7 @@
 #include "as_builder.hpp"
 
 #include <chrono>
+#include <deque>
 #include <cstring>
 
 namespace vkas_tool {
@@ -103,6 +104,109 @@ std::vector<unsigned char> encodeVertices(const Mesh& mesh, VertexLayout layout)
         }
     }
     return out;
+}
+
+// Where the data of a sphere, swept-sphere or box structure sits in the input buffer.
+struct PrimitivePlacement {
+    VkDeviceSize positions = 0, radii = 0, indices = 0, boxes = 0;
+    uint32_t vertexCount = 0, primitiveCount = 0;
+};
+
+PrimitivePlacement placePrimitives(ByteWriter& writer, const BlasDesc& blas) {
+    PrimitivePlacement p;
+    std::vector<float> positions, radii;
+    auto addPoint = [&](Vec3 v, float r) {
+        positions.insert(positions.end(), {v.x, v.y, v.z});
+        radii.push_back(r);
+    };
+    switch (blas.kind) {
+    case PrimitiveKind::Triangles: break;
+    case PrimitiveKind::Spheres:
+        for (const Sphere& sp : blas.spheres) addPoint(sp.center, sp.radius);
+        p.primitiveCount = static_cast<uint32_t>(blas.spheres.size());
+        break;
+    case PrimitiveKind::SweptSpheres: {
+        // SUCCESSIVE indexing: index k makes the segment (k, k + 1), so a chain of n points contributes the
+        // indices of its first n - 1 points.
+        std::vector<uint32_t> indices;
+        for (const SweptSphereChain& c : blas.chains) {
+            const uint32_t first = static_cast<uint32_t>(radii.size());
+            for (size_t k = 0; k < c.points.size(); ++k) addPoint(c.points[k], c.radii[k]);
+            for (uint32_t k = 0; k < c.segmentCount(); ++k) indices.push_back(first + k);
+        }
+        p.indices = writer.append(indices, 4);
+        p.primitiveCount = static_cast<uint32_t>(indices.size());
+        break;
+    }
+    case PrimitiveKind::ProceduralBoxes: {
+        std::vector<VkAabbPositionsKHR> boxes;
+        for (const Box& bx : blas.boxes) boxes.push_back({bx.lo.x, bx.lo.y, bx.lo.z, bx.hi.x, bx.hi.y, bx.hi.z});
+        p.boxes = writer.append(boxes, 8);
+        p.primitiveCount = static_cast<uint32_t>(boxes.size());
+        return p;
+    }
+    }
+    p.vertexCount = static_cast<uint32_t>(radii.size());
+    p.positions = writer.append(positions, 4);
+    p.radii = writer.append(radii, 4);
+    return p;
+}
+
+// The pNext data of one sphere or swept-sphere geometry.
+struct PrimitiveData {
+    VkAccelerationStructureGeometrySpheresDataNV spheres{VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_GEOMETRY_SPHERES_DATA_NV};
+    VkAccelerationStructureGeometryLinearSweptSpheresDataNV lss{
+        VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_GEOMETRY_LINEAR_SWEPT_SPHERES_DATA_NV};
+};
+
+VkAccelerationStructureGeometryKHR primitiveGeometry(const BlasDesc& blas, const PrimitivePlacement& p,
+                                                     const unsigned char* base, PrimitiveData& data,
+                                                     VkAccelerationStructureBuildRangeInfoKHR& range) {
+    VkAccelerationStructureGeometryKHR geom{VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_GEOMETRY_KHR};
+    geom.flags = VK_GEOMETRY_OPAQUE_BIT_KHR;
+    range.primitiveCount = p.primitiveCount;
+    switch (blas.kind) {
+    case PrimitiveKind::Triangles: break;
+    case PrimitiveKind::Spheres: {
+        auto& s = data.spheres;
+        s.vertexFormat = VK_FORMAT_R32G32B32_SFLOAT;
+        s.vertexData.hostAddress = base + p.positions;
+        s.vertexStride = 12;
+        s.radiusFormat = VK_FORMAT_R32_SFLOAT;
+        s.radiusData.hostAddress = base + p.radii;
+        s.radiusStride = 4;
+        s.indexType = VK_INDEX_TYPE_NONE_KHR;  // sphere i is entry i
+        geom.geometryType = VK_GEOMETRY_TYPE_SPHERES_NV;
+        geom.pNext = &s;
+        break;
+    }
+    case PrimitiveKind::SweptSpheres: {
+        auto& l = data.lss;
+        l.vertexFormat = VK_FORMAT_R32G32B32_SFLOAT;
+        l.vertexData.hostAddress = base + p.positions;
+        l.vertexStride = 12;
+        l.radiusFormat = VK_FORMAT_R32_SFLOAT;
+        l.radiusData.hostAddress = base + p.radii;
+        l.radiusStride = 4;
+        l.indexType = VK_INDEX_TYPE_UINT32;
+        l.indexData.hostAddress = base + p.indices;
+        l.indexStride = 4;
+        l.indexingMode = VK_RAY_TRACING_LSS_INDEXING_MODE_SUCCESSIVE_NV;
+        l.endCapsMode = VK_RAY_TRACING_LSS_PRIMITIVE_END_CAPS_MODE_CHAINED_NV;
+        geom.geometryType = VK_GEOMETRY_TYPE_LINEAR_SWEPT_SPHERES_NV;
+        geom.pNext = &l;
+        break;
+    }
+    case PrimitiveKind::ProceduralBoxes: {
+        auto& a = geom.geometry.aabbs;
+        a.sType = VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_GEOMETRY_AABBS_DATA_KHR;
+        a.data.hostAddress = base + p.boxes;
+        a.stride = sizeof(VkAabbPositionsKHR);
+        geom.geometryType = VK_GEOMETRY_TYPE_AABBS_KHR;
+        break;
+    }
+    }
+    return geom;
 }
 
 }  // namespace
@@ -236,7 +340,12 @@ std::unique_ptr<StructureSet> buildBottomLevel(VkContext& ctx, const std::vector
     };
     ByteWriter writer;
     std::vector<std::vector<Placement>> placements(blases.size());
+    std::vector<PrimitivePlacement> primitivePlacements(blases.size());
     for (size_t b = 0; b < blases.size(); ++b) {
+        if (blases[b].kind != PrimitiveKind::Triangles) {
+            primitivePlacements[b] = placePrimitives(writer, blases[b]);
+            continue;
+        }
         for (const GeometryDesc& g : blases[b].geometries) {
             Placement p;
             p.vertices = writer.append(encodeVertices(*g.mesh, g.layout), 16);
@@ -263,9 +372,18 @@ std::unique_ptr<StructureSet> buildBottomLevel(VkContext& ctx, const std::vector
     std::vector<std::vector<VkAccelerationStructureBuildRangeInfoKHR>> ranges(blases.size());
     std::vector<std::vector<uint32_t>> counts(blases.size());
     std::vector<VkAccelerationStructureBuildGeometryInfoKHR> infos(blases.size());
+    std::deque<PrimitiveData> primitiveData;  // pNext structures: stable addresses until the build
     for (size_t b = 0; b < blases.size(); ++b) {
         StructureStats stats;
         stats.name = blases[b].name;
+        if (blases[b].kind != PrimitiveKind::Triangles) {
+            primitiveData.emplace_back();
+            VkAccelerationStructureBuildRangeInfoKHR range{};
+            geometries[b].push_back(primitiveGeometry(blases[b], primitivePlacements[b], base, primitiveData.back(), range));
+            ranges[b].push_back(range);
+            counts[b].push_back(range.primitiveCount);
+            stats.primitives += range.primitiveCount;
+        }
         for (size_t gi = 0; gi < blases[b].geometries.size(); ++gi) {
             const GeometryDesc& g = blases[b].geometries[gi];
             const Placement& p = placements[b][gi];

@@ -54,8 +54,10 @@ int runInfo(const InfoOptions& options) {
     std::printf("host threads: %u hardware threads; ray query state: %d bytes\n",
                 std::thread::hardware_concurrency(), VKAS_RAY_QUERY_SIZE);
 
+    VkPhysicalDeviceRayTracingLinearSweptSpheresFeaturesNV lss{
+        VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_RAY_TRACING_LINEAR_SWEPT_SPHERES_FEATURES_NV};
     VkPhysicalDeviceAccelerationStructureFeaturesKHR f{
-        VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_ACCELERATION_STRUCTURE_FEATURES_KHR};
+        VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_ACCELERATION_STRUCTURE_FEATURES_KHR, &lss};
     vkasGetAccelerationStructureFeatures(dev, &f);
     std::printf("\nfeatures (VkPhysicalDeviceAccelerationStructureFeaturesKHR)\n");
     std::printf("  accelerationStructure                                  %s\n", yesNo(f.accelerationStructure));
@@ -71,6 +73,14 @@ int runInfo(const InfoOptions& options) {
     VkPhysicalDeviceAccelerationStructurePropertiesKHR p{
         VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_ACCELERATION_STRUCTURE_PROPERTIES_KHR};
     vkasGetAccelerationStructureProperties(dev, &p);
+    std::printf("\nfeatures (VkPhysicalDeviceRayTracingLinearSweptSpheresFeaturesNV)\n");
+    std::printf("  spheres                                                %s\n", yesNo(lss.spheres));
+    std::printf("  linearSweptSpheres                                     %s\n", yesNo(lss.linearSweptSpheres));
+    std::printf("\ngeometry and structure kinds: triangles, AABBs (ray queries, vkasTraceRaysProcedural), spheres and "
+                "linear swept spheres (VK_NV_ray_tracing_linear_swept_spheres), motion instances and motion triangles "
+                "(VK_NV_ray_tracing_motion_blur, vkasRayQueryInitializeMotion), position fetch "
+                "(VK_KHR_ray_tracing_position_fetch)\n");
+
     std::printf("\nlimits (VkPhysicalDeviceAccelerationStructurePropertiesKHR)\n");
     std::printf("  maxGeometryCount                                            %llu\n",
                 static_cast<unsigned long long>(p.maxGeometryCount));

@@ -40,21 +40,24 @@ int runRender(const RenderCommandOptions& options) {
     auto blas = buildBottomLevel(ctx, scene.blases, defaultBuildFlags());
     std::printf("\nbottom level: %zu structures built in one vkBuildAccelerationStructuresKHR call\n",
                 blas->handles.size());
-    std::printf("  %-12s %10s %10s %12s %10s %14s\n", "structure", "geometries", "triangles", "size (bytes)",
-                "bytes/tri", "scratch (bytes)");
+    std::printf("  %-12s %-16s %10s %10s %12s %10s %14s\n", "structure", "primitives", "geometries", "count",
+                "size (bytes)", "bytes/prim", "scratch (bytes)");
+    static const char* const kKinds[] = {"triangles", "spheres", "swept spheres", "procedural boxes"};
     for (size_t i = 0; i < blas->stats.size(); ++i) {
         const StructureStats& s = blas->stats[i];
-        std::printf("  %-12s %10zu %10llu %12llu %10.1f %14llu\n", s.name.c_str(), scene.blases[i].geometries.size(),
+        const BlasDesc& d = scene.blases[i];
+        std::printf("  %-12s %-16s %10zu %10llu %12llu %10.1f %14llu\n", s.name.c_str(),
+                    kKinds[static_cast<int>(d.kind)], d.kind == PrimitiveKind::Triangles ? d.geometries.size() : 1,
                     static_cast<unsigned long long>(s.primitives), static_cast<unsigned long long>(s.size),
                     s.primitives ? static_cast<double>(s.size) / s.primitives : 0.0,
                     static_cast<unsigned long long>(s.buildScratchSize));
     }
     const uint64_t tris = blas->totalPrimitives();
-    std::printf("  %-12s %10s %10llu %12llu %10.1f %14llu\n", "total", "",
+    std::printf("  %-12s %-16s %10s %10llu %12llu %10.1f %14llu\n", "total", "", "",
                 static_cast<unsigned long long>(tris), static_cast<unsigned long long>(blas->totalSize()),
                 tris ? static_cast<double>(blas->totalSize()) / tris : 0.0,
                 static_cast<unsigned long long>(blas->scratchBytes));
-    std::printf("  build %.2f ms (%.2f Mtris/s, one thread), sizes query %.3f ms, input data %.2f MiB\n",
+    std::printf("  build %.2f ms (%.2f Mprims/s, one thread), sizes query %.3f ms, input data %.2f MiB\n",
                 blas->buildMs, rate(static_cast<double>(tris), blas->buildMs), blas->sizeQueryMs,
                 mib(static_cast<double>(blas->inputBytes)));
 
@@ -75,7 +78,7 @@ int runRender(const RenderCommandOptions& options) {
     renderOptions.aoSamples = options.aoSamples;
     RenderStats stats;
     Image image = render(ctx, scene, tlas->handles[0], renderOptions, stats);
-    std::printf("\ntrace (vkasTraceRays, %u threads)\n", threads);
+    std::printf("\ntrace (vkasTraceRaysProcedural: crates intersected by the renderer, %u threads)\n", threads);
     std::printf("  primary    %10llu rays %9.1f ms %8.2f Mrays/s  (closest hit, %.1f%% hit)\n",
                 static_cast<unsigned long long>(stats.primaryRays), stats.primaryMs,
                 rate(static_cast<double>(stats.primaryRays), stats.primaryMs),

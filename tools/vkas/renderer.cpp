@@ -22,12 +22,65 @@ struct Surface {
     Vec3 albedo;
 };
 
+// The object-space normal of a hit on a built-in primitive other than a triangle (spheres, swept spheres, boxes).
+Vec3 primitiveNormal(const BlasDesc& blas, uint32_t prim, Vec3 p) {
+    switch (blas.kind) {
+    case PrimitiveKind::Spheres: return p - blas.spheres.at(prim).center;
+    case PrimitiveKind::SweptSpheres: {
+        // Find the segment, then the normal of the cone through its two spheres at the closest axis point,
+        // tilted by the radius slope (exact on the cone, the caps are spheres).
+        for (const SweptSphereChain& c : blas.chains) {
+            if (prim >= c.segmentCount()) {
+                prim -= c.segmentCount();
+                continue;
+            }
+            const Vec3 a = c.points[prim], b = c.points[prim + 1];
+            const float ra = c.radii[prim], rb = c.radii[prim + 1];
+            const Vec3 axis = b - a;
+            const float len2 = dot(axis, axis);
+            float t = len2 > 0 ? dot(p - a, axis) / len2 : 0.0f;
+            const Vec3 q = a + axis * std::clamp(t, 0.0f, 1.0f);
+            Vec3 radial = p - q;
+            if (t <= 0.0f || t >= 1.0f || len2 == 0.0f) return radial;  // a cap
+            radial = normalize(radial - axis * (dot(radial, axis) / len2));
+            // The tangent cone's normal leans towards the smaller sphere by the radius slope.
+            const float len = std::sqrt(len2), dr = ra - rb;
+            return radial * std::sqrt(std::max(len2 - dr * dr, 0.0f)) + axis * (dr / len);
+        }
+        return {0, 1, 0};
+    }
+    case PrimitiveKind::ProceduralBoxes: {
+        const Box& bx = blas.boxes.at(prim);
+        const Vec3 c = (bx.lo + bx.hi) * 0.5f, h = (bx.hi - bx.lo) * 0.5f;
+        const Vec3 d{(p.x - c.x) / h.x, (p.y - c.y) / h.y, (p.z - c.z) / h.z};
+        const Vec3 a{std::fabs(d.x), std::fabs(d.y), std::fabs(d.z)};
+        if (a.x >= a.y && a.x >= a.z) return {d.x > 0 ? 1.0f : -1.0f, 0, 0};
+        if (a.y >= a.z) return {0, d.y > 0 ? 1.0f : -1.0f, 0};
+        return {0, 0, d.z > 0 ? 1.0f : -1.0f};
+    }
+    case PrimitiveKind::Triangles: break;
+    }
+    return {0, 1, 0};
+}
+
 Surface surfaceAt(const Scene& scene, const VkasRay& ray, const VkasHit& hit) {
     const InstanceDesc& inst = scene.instances.at(static_cast<size_t>(hit.instanceId));
-    const GeometryDesc& geom = scene.blases.at(inst.blas).geometries.at(static_cast<size_t>(hit.geometryIndex));
+    const BlasDesc& blas = scene.blases.at(inst.blas);
+    Vec3 dir{ray.direction[0], ray.direction[1], ray.direction[2]};
+    Surface s;
+    s.position = Vec3{ray.origin[0], ray.origin[1], ray.origin[2]} + dir * hit.t;
+    s.albedo = scene.materials.at(static_cast<size_t>(hit.instanceCustomIndex) % scene.materials.size()).albedo;
+    const uint32_t prim = static_cast<uint32_t>(hit.primitiveIndex);
+    if (blas.kind != PrimitiveKind::Triangles) {
+        const Vec3 n = primitiveNormal(blas, prim, inst.transform.inverse().point(s.position));
+        s.geometricNormal = normalize(inst.transform.normal(n));
+        if (dot(s.geometricNormal, dir) > 0) s.geometricNormal = -s.geometricNormal;
+        s.shadingNormal = s.geometricNormal;
+        return s;
+    }
+    const GeometryDesc& geom = blas.geometries.at(static_cast<size_t>(hit.geometryIndex));
     const Mesh& mesh = *geom.mesh;
     const Affine toWorld = geom.transform ? inst.transform * *geom.transform : inst.transform;
-    const uint32_t prim = static_cast<uint32_t>(hit.primitiveIndex);
 
     Vec3 w[3], n[3];
     for (uint32_t c = 0; c < 3; ++c) {
@@ -35,16 +88,31 @@ Surface surfaceAt(const Scene& scene, const VkasRay& ray, const VkasHit& hit) {
         w[c] = toWorld.point(mesh.positions[v]);
         n[c] = mesh.normals[v];
     }
-    Vec3 dir{ray.direction[0], ray.direction[1], ray.direction[2]};
-    Surface s;
-    s.position = Vec3{ray.origin[0], ray.origin[1], ray.origin[2]} + dir * hit.t;
     s.geometricNormal = normalize(cross(w[1] - w[0], w[2] - w[0]));
     if (dot(s.geometricNormal, dir) > 0) s.geometricNormal = -s.geometricNormal;
     const float u = hit.barycentrics[0], v = hit.barycentrics[1];
     s.shadingNormal = normalize(toWorld.normal(n[0] * (1 - u - v) + n[1] * u + n[2] * v));
     if (dot(s.shadingNormal, s.geometricNormal) < 0) s.shadingNormal = -s.shadingNormal;
-    s.albedo = scene.materials.at(static_cast<size_t>(hit.instanceCustomIndex) % scene.materials.size()).albedo;
     return s;
+}
+
+// The renderer's intersection step for procedural boxes: where the object-space ray enters the crate.
+VkBool32 VKAPI_PTR intersectCrate(void* user, const VkasAabbCandidate* c, float* tHit) {
+    const Scene& scene = *static_cast<const Scene*>(user);
+    const BlasDesc& blas = scene.blases.at(scene.instances.at(static_cast<size_t>(c->instanceId)).blas);
+    const Box& bx = blas.boxes.at(static_cast<size_t>(c->primitiveIndex));
+    const float lo[3] = {bx.lo.x, bx.lo.y, bx.lo.z}, hi[3] = {bx.hi.x, bx.hi.y, bx.hi.z};
+    float tNear = c->tMin, tFar = c->tMax;
+    for (int a = 0; a < 3; ++a) {
+        const float inv = 1.0f / c->objectRayDirection[a];
+        float t0 = (lo[a] - c->objectRayOrigin[a]) * inv, t1 = (hi[a] - c->objectRayOrigin[a]) * inv;
+        if (t0 > t1) std::swap(t0, t1);
+        tNear = std::max(tNear, t0);
+        tFar = std::min(tFar, t1);
+    }
+    if (!(tNear <= tFar)) return VK_FALSE;
+    *tHit = tNear;
+    return VK_TRUE;
 }
 
 // Cosine-weighted direction around n.
@@ -66,13 +134,14 @@ uint8_t toSrgb8(float linear) {
     return static_cast<uint8_t>(std::lround(s * 255.0f));
 }
 
-void trace(VkContext& ctx, VkAccelerationStructureKHR tlas, VkasTraceMode mode, const std::vector<VkasRay>& rays,
-           std::vector<VkasHit>& hits, double& ms) {
+void trace(VkContext& ctx, const Scene& scene, VkAccelerationStructureKHR tlas, VkasTraceMode mode,
+           const std::vector<VkasRay>& rays, std::vector<VkasHit>& hits, double& ms) {
     hits.resize(rays.size());
     auto t0 = std::chrono::steady_clock::now();
-    check(vkasTraceRays(ctx.device(), tlas, mode, VKAS_RAY_FLAG_NONE, 0xFF, static_cast<uint32_t>(rays.size()),
-                        rays.data(), hits.data()),
-          "vkasTraceRays");
+    check(vkasTraceRaysProcedural(ctx.device(), tlas, mode, VKAS_RAY_FLAG_NONE, 0xFF,
+                                  static_cast<uint32_t>(rays.size()), rays.data(), hits.data(), intersectCrate,
+                                  const_cast<Scene*>(&scene)),
+          "vkasTraceRaysProcedural");
     ms += millisecondsSince(t0);
 }
 
@@ -104,7 +173,7 @@ Image render(VkContext& ctx, const Scene& scene, VkAccelerationStructureKHR topL
         }
     }
     std::vector<VkasHit> primaryHits;
-    trace(ctx, topLevel, VKAS_TRACE_MODE_CLOSEST_HIT, primary, primaryHits, stats.primaryMs);
+    trace(ctx, scene, topLevel, VKAS_TRACE_MODE_CLOSEST_HIT, primary, primaryHits, stats.primaryMs);
     stats.primaryRays = pixels;
 
     // Occlusion rays in chunks of pixels, so that memory stays bounded whatever the sample count.
@@ -153,7 +222,7 @@ Image render(VkContext& ctx, const Scene& scene, VkAccelerationStructureKHR topL
                 rays.push_back(r);
             }
         }
-        trace(ctx, topLevel, VKAS_TRACE_MODE_ANY_HIT, rays, hits, stats.occlusionMs);
+        trace(ctx, scene, topLevel, VKAS_TRACE_MODE_ANY_HIT, rays, hits, stats.occlusionMs);
         stats.occlusionRays += rays.size();
 
         // Shade. AO rays of a pixel follow its shadow ray, in pixel order.

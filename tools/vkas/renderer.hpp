@@ -1,6 +1,7 @@
 // Ray-traced ambient-occlusion renderer: primary rays (closest hit) and occlusion rays (any hit: ambient
-// occlusion within a radius, plus one sun shadow ray) traced in batches with vkasTraceRays. Surface normals
-// come from the application's own mesh data, found through the hit's instance, geometry and primitive indices.
+// occlusion within a radius, plus one sun shadow ray) traced in batches with vkasTraceRaysProcedural, whose
+// intersection callback makes the procedural boxes solid crates. Surface normals come from the application's own
+// mesh and primitive data, found through the hit's instance, geometry and primitive indices.
 #pragma once
 
 #include <cstdint>

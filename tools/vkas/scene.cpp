@@ -28,6 +28,30 @@ enum : uint32_t { kGround, kStone, kWhite, kRed, kOrange, kYellow, kGreen, kTeal
 
 }  // namespace
 
+uint64_t BlasDesc::primitiveCount() const {
+    switch (kind) {
+    case PrimitiveKind::Triangles: {
+        uint64_t n = 0;
+        for (const GeometryDesc& g : geometries) n += g.mesh->triangleCount();
+        return n;
+    }
+    case PrimitiveKind::Spheres: return spheres.size();
+    case PrimitiveKind::SweptSpheres: {
+        uint64_t n = 0;
+        for (const SweptSphereChain& c : chains) n += c.segmentCount();
+        return n;
+    }
+    case PrimitiveKind::ProceduralBoxes: return boxes.size();
+    }
+    return 0;
+}
+
+uint64_t Scene::uniquePrimitives() const {
+    uint64_t n = 0;
+    for (const BlasDesc& b : blases) n += b.primitiveCount();
+    return n;
+}
+
 uint64_t Scene::uniqueTriangles() const {
     uint64_t n = 0;
     for (const BlasDesc& b : blases)
@@ -110,6 +134,49 @@ Scene makeBuiltinScene(const SceneOptions& options) {
          },
          false});
 
+    // Built-in primitives beside the triangles: a cloud of spheres, coils of swept spheres, a stack of crates that
+    // are procedural boxes.
+    enum : uint32_t { kBubblesBlas = kMonumentBlas + 1, kCoilBlas, kCratesBlas };
+    {
+        BlasDesc bubbles{"bubbles", {}, false, PrimitiveKind::Spheres};
+        Rng sphereRng(options.seed, 29);
+        for (int i = 0; i < 160; ++i) {
+            const float a = 0.35f * static_cast<float>(i), h = 0.045f * static_cast<float>(i);
+            const float r = 0.55f + 0.25f * std::sin(0.5f * a);
+            bubbles.spheres.push_back({{r * std::cos(a) + sphereRng.uniform(-0.1f, 0.1f), h,
+                                        r * std::sin(a) + sphereRng.uniform(-0.1f, 0.1f)},
+                                       sphereRng.uniform(0.08f, 0.22f)});
+        }
+        scene.blases.push_back(std::move(bubbles));
+
+        BlasDesc coil{"coil", {}, false, PrimitiveKind::SweptSpheres};
+        for (int c = 0; c < 3; ++c) {  // three intertwined helices, their radius tapering towards the top
+            SweptSphereChain chain;
+            for (int k = 0; k <= 96; ++k) {
+                const float t = static_cast<float>(k) / 96.0f;
+                const float a = 2.0f * std::numbers::pi_v<float> * (3.0f * t + static_cast<float>(c) / 3.0f);
+                chain.points.push_back({0.8f * std::cos(a), 4.0f * t, 0.8f * std::sin(a)});
+                chain.radii.push_back(0.16f * (1.0f - 0.7f * t));
+            }
+            coil.chains.push_back(std::move(chain));
+        }
+        SweptSphereChain post;  // the axis: one cone-like segment
+        post.points = {{0, 0, 0}, {0, 4.4f, 0}};
+        post.radii = {0.28f, 0.06f};
+        coil.chains.push_back(std::move(post));
+        scene.blases.push_back(std::move(coil));
+
+        BlasDesc crates{"crates", {}, false, PrimitiveKind::ProceduralBoxes};
+        for (int layer = 0; layer < 4; ++layer)
+            for (int i = 0; i < 4 - layer; ++i)
+                for (int j = 0; j < 4 - layer; ++j) {
+                    const Vec3 lo{static_cast<float>(i) + 0.5f * layer - 2.0f, static_cast<float>(layer),
+                                  static_cast<float>(j) + 0.5f * layer - 2.0f};
+                    crates.boxes.push_back({lo + Vec3{0.04f, 0.0f, 0.04f}, lo + Vec3{0.96f, 0.92f, 0.96f}});
+                }
+        scene.blases.push_back(std::move(crates));
+    }
+
     auto place = [&](uint32_t blas, float x, float z, float lift, float scale, float yaw, Vec3 tiltAxis, float tilt,
                      uint32_t material, VkGeometryInstanceFlagsKHR flags = 0) {
         InstanceDesc inst;
@@ -128,6 +195,11 @@ Scene makeBuiltinScene(const SceneOptions& options) {
     place(kMonumentBlas, -12.0f, 6.0f, -0.1f, 2.5f, 0.0f, {0, 1, 0}, 0.0f, kWhite);
     place(kMonumentBlas, 14.0f, 2.0f, -0.1f, 2.5f, 0.0f, {0, 1, 0}, 0.0f, kWhite);
     place(kSphereBlas, -4.0f, 10.0f, 0.9f, 2.2f, 0.0f, {0, 1, 0}, 0.0f, kBlue);
+    place(kBubblesBlas, -15.0f, 14.0f, 0.2f, 2.0f, 0.0f, {0, 1, 0}, 0.0f, kTeal);
+    place(kCoilBlas, 6.0f, 8.0f, -0.1f, 2.0f, 0.4f, {0, 1, 0}, 0.0f, kRed);
+    place(kCoilBlas, -20.0f, -4.0f, -0.1f, 1.6f, 1.1f, {0, 1, 0}, 0.0f, kViolet);
+    place(kCratesBlas, -5.0f, 0.0f, 0.0f, 1.6f, 0.3f, {0, 1, 0}, 0.0f, kOrange);
+    place(kCratesBlas, 20.0f, 12.0f, 0.0f, 1.3f, 1.0f, {0, 1, 0}, 0.0f, kYellow);
 
     Rng rng(options.seed, 17);
     const uint32_t colours[] = {kRed, kOrange, kYellow, kGreen, kTeal, kBlue, kViolet, kWhite};
@@ -147,8 +219,14 @@ Scene makeBuiltinScene(const SceneOptions& options) {
         } else if (kind < 0.80f) {
             place(kCrystalBlas, x, z, -0.1f, rng.uniform(0.4f, 1.0f), yaw, axis, rng.uniform(0, 0.2f), kCrystal,
                   (i & 1) ? VK_GEOMETRY_INSTANCE_FORCE_OPAQUE_BIT_KHR : 0);
-        } else if (kind < 0.92f) {
+        } else if (kind < 0.90f) {
             place(kKnotBlas, x, z, 0.9f, rng.uniform(0.3f, 0.7f), yaw, axis, rng.uniform(0, 3.0f), colour);
+        } else if (kind < 0.92f) {
+            place(kBubblesBlas, x, z, 0.1f, rng.uniform(0.5f, 1.0f), yaw, {0, 1, 0}, 0, colour);
+        } else if (kind < 0.94f) {
+            place(kCoilBlas, x, z, -0.1f, rng.uniform(0.4f, 0.9f), yaw, {0, 1, 0}, 0, colour);
+        } else if (kind < 0.96f) {
+            place(kCratesBlas, x, z, 0.0f, rng.uniform(0.3f, 0.6f), yaw, {0, 1, 0}, 0, colour);
         } else {
             place(kMonumentBlas, x, z, -0.05f, rng.uniform(0.4f, 0.8f), yaw, {0, 1, 0}, 0, kWhite);
         }

@@ -29,10 +29,41 @@ struct GeometryDesc {
     VkGeometryFlagsKHR flags = VK_GEOMETRY_OPAQUE_BIT_KHR;
 };
 
+// What a bottom-level structure holds: a structure holds one primitive type (VUID 03792).
+enum class PrimitiveKind {
+    Triangles,        // `geometries`
+    Spheres,          // `spheres`: VK_GEOMETRY_TYPE_SPHERES_NV
+    SweptSpheres,     // `chains`: VK_GEOMETRY_TYPE_LINEAR_SWEPT_SPHERES_NV, SUCCESSIVE indexing, CHAINED end caps
+    ProceduralBoxes,  // `boxes`: VK_GEOMETRY_TYPE_AABBS_KHR, intersected by the renderer's procedural step
+};
+
+struct Sphere {
+    Vec3 center;
+    float radius = 1.0f;
+};
+
+// A chain of linear swept spheres: segment k joins points[k] (radius radii[k]) to points[k + 1]. Primitive
+// indices number the segments of all chains of a structure in order.
+struct SweptSphereChain {
+    std::vector<Vec3> points;
+    std::vector<float> radii;
+    uint32_t segmentCount() const { return points.size() < 2 ? 0u : static_cast<uint32_t>(points.size() - 1); }
+};
+
+struct Box {
+    Vec3 lo, hi;
+};
+
 struct BlasDesc {
     std::string name;
     std::vector<GeometryDesc> geometries;
     bool usePointerArray = false;  // pass the geometries through ppGeometries instead of pGeometries
+    PrimitiveKind kind = PrimitiveKind::Triangles;
+    std::vector<Sphere> spheres;
+    std::vector<SweptSphereChain> chains;
+    std::vector<Box> boxes;
+
+    uint64_t primitiveCount() const;  // triangles, spheres, segments or boxes
 };
 
 struct InstanceDesc {
@@ -63,6 +94,7 @@ struct Scene {
 
     uint64_t uniqueTriangles() const;     // triangles in all bottom-level structures
     uint64_t instancedTriangles() const;  // triangles seen through all instances
+    uint64_t uniquePrimitives() const;    // primitives of every kind in all bottom-level structures
 };
 
 struct SceneOptions {

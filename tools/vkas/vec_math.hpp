@@ -45,6 +45,20 @@ struct Affine {
         Vec3 r0 = cross(c1, c2), r1 = cross(c2, c0), r2 = cross(c0, c1);
         return r0 * n.x + r1 * n.y + r2 * n.z;
     }
+    // The inverse transform (the linear part must be invertible).
+    Affine inverse() const {
+        Vec3 c0{m[0][0], m[1][0], m[2][0]}, c1{m[0][1], m[1][1], m[2][1]}, c2{m[0][2], m[1][2], m[2][2]};
+        Vec3 r0 = cross(c1, c2), r1 = cross(c2, c0), r2 = cross(c0, c1);  // rows of the inverse, times det
+        float invDet = 1.0f / dot(c0, r0);
+        Affine a;
+        const Vec3 rows[3] = {r0 * invDet, r1 * invDet, r2 * invDet};
+        const Vec3 t{m[0][3], m[1][3], m[2][3]};
+        for (int r = 0; r < 3; ++r) {
+            a.m[r][0] = rows[r].x, a.m[r][1] = rows[r].y, a.m[r][2] = rows[r].z;
+            a.m[r][3] = -dot(rows[r], t);
+        }
+        return a;
+    }
     VkTransformMatrixKHR toVk() const {
         VkTransformMatrixKHR t{};
         for (int r = 0; r < 3; ++r)
