@@ -56,6 +56,24 @@ const void* findInChain(const void* pNext, VkStructureType sType) {
     return nullptr;
 }
 
+namespace {
+
+// The members the two data structures share, in the same order.
+template <typename Data>
+void copyCommon(const Data& s, SweptSpheresData& out) {
+    out.vertexFormat = s.vertexFormat;
+    out.vertexData = static_cast<const std::byte*>(s.vertexData.hostAddress);
+    out.vertexStride = s.vertexStride;
+    out.radiusFormat = s.radiusFormat;
+    out.radiusData = static_cast<const std::byte*>(s.radiusData.hostAddress);
+    out.radiusStride = s.radiusStride;
+    out.indexType = s.indexType;
+    out.indexData = static_cast<const std::byte*>(s.indexData.hostAddress);
+    out.indexStride = s.indexStride;
+}
+
+}  // namespace
+
 bool sweptSpheresData(const VkAccelerationStructureGeometryKHR& geometry, SweptSpheresData& out) {
     if (geometry.geometryType == VK_GEOMETRY_TYPE_SPHERES_NV) {
         auto* s = static_cast<const VkAccelerationStructureGeometrySpheresDataNV*>(
@@ -63,15 +81,7 @@ bool sweptSpheresData(const VkAccelerationStructureGeometryKHR& geometry, SweptS
         if (!s) return false;
         out = SweptSpheresData{};
         out.lss = false;
-        out.vertexFormat = s->vertexFormat;
-        out.vertexData = static_cast<const std::byte*>(s->vertexData.hostAddress);
-        out.vertexStride = s->vertexStride;
-        out.radiusFormat = s->radiusFormat;
-        out.radiusData = static_cast<const std::byte*>(s->radiusData.hostAddress);
-        out.radiusStride = s->radiusStride;
-        out.indexType = s->indexType;
-        out.indexData = static_cast<const std::byte*>(s->indexData.hostAddress);
-        out.indexStride = s->indexStride;
+        copyCommon(*s, out);
         return true;
     }
     if (geometry.geometryType == VK_GEOMETRY_TYPE_LINEAR_SWEPT_SPHERES_NV) {
@@ -80,15 +90,7 @@ bool sweptSpheresData(const VkAccelerationStructureGeometryKHR& geometry, SweptS
         if (!s) return false;
         out = SweptSpheresData{};
         out.lss = true;
-        out.vertexFormat = s->vertexFormat;
-        out.vertexData = static_cast<const std::byte*>(s->vertexData.hostAddress);
-        out.vertexStride = s->vertexStride;
-        out.radiusFormat = s->radiusFormat;
-        out.radiusData = static_cast<const std::byte*>(s->radiusData.hostAddress);
-        out.radiusStride = s->radiusStride;
-        out.indexType = s->indexType;
-        out.indexData = static_cast<const std::byte*>(s->indexData.hostAddress);
-        out.indexStride = s->indexStride;
+        copyCommon(*s, out);
         out.indexingMode = s->indexingMode;
         out.endCapsMode = s->endCapsMode;
         return true;

@@ -192,6 +192,26 @@ void commit(RayQueryState& q, const QueryHit& hit, uint32_t type) {
     if (q.flags & kRayTerminateOnFirstHit) q.done = true;
 }
 
+// Starts a candidate on the current instance: type and t given, no primitive yet, no barycentrics or facing, the
+// instance's object ray. The callers then name the primitive and fill what their kind defines.
+inline QueryHit& startCandidate(RayQueryState& q, uint32_t type, float t) {
+    QueryHit& c = q.candidate;
+    c.type = type;
+    c.t = t;
+    c.barycentrics[0] = c.barycentrics[1] = 0.0f;
+    c.frontFace = false;
+    c.aabbOpaque = false;
+    c.instance = q.instance;
+    c.triangle = nullptr;
+    c.aabb = nullptr;
+    c.sphere = nullptr;
+    c.lss = nullptr;
+    c.lssHitValue = 0.0f;
+    std::memcpy(c.objectOrigin, q.objectRay.org, sizeof c.objectOrigin);
+    std::memcpy(c.objectDirection, q.objectRay.dir, sizeof c.objectDirection);
+    return c;
+}
+
 // Tests `tri` with the positions `v` (the record's own, or [NV-motion] the ones interpolated at the ray time).
 TriangleOutcome testTriangle(RayQueryState& q, const TriangleRecord& tri, const float (*v)[3]) {
     if (tri.flags & kTriangleDegenerate) return TriangleOutcome::None;
@@ -208,21 +228,11 @@ TriangleOutcome testTriangle(RayQueryState& q, const TriangleRecord& tri, const 
     const bool opaque = resolveOpacity((tri.flags & kTriangleOpaque) != 0, instanceFlags, q.flags);
     if (culledByOpacity(opaque, q.flags)) return TriangleOutcome::None;
 
-    QueryHit& c = q.candidate;
-    c.type = kCandidateTriangle;
-    c.t = th.t;
+    QueryHit& c = startCandidate(q, kCandidateTriangle, th.t);
     c.barycentrics[0] = th.b;
     c.barycentrics[1] = th.c;
     c.frontFace = front;
-    c.aabbOpaque = false;
-    c.instance = q.instance;
     c.triangle = &tri;
-    c.aabb = nullptr;
-    c.sphere = nullptr;
-    c.lss = nullptr;
-    c.lssHitValue = 0.0f;
-    std::memcpy(c.objectOrigin, q.objectRay.org, sizeof c.objectOrigin);
-    std::memcpy(c.objectDirection, q.objectRay.dir, sizeof c.objectDirection);
     if (opaque) {
         commit(q, c, kCommittedTriangle);
         return TriangleOutcome::Committed;
@@ -231,7 +241,6 @@ TriangleOutcome testTriangle(RayQueryState& q, const TriangleRecord& tri, const 
     return TriangleOutcome::Candidate;
 }
 
-// Tests the rest of the current triangle leaf. Returns true when a candidate needs the application.
 // [NV-motion] The rest of the current leaf of a motion bottom level: positions interpolated at the ray time.
 bool visitMotionTriangleLeaf(RayQueryState& q) {
     const MotionTriangleRecord* records = motionTriangles(q.bottomLevel);
@@ -246,6 +255,7 @@ bool visitMotionTriangleLeaf(RayQueryState& q) {
     return false;
 }
 
+// Tests the rest of the current triangle leaf. Returns true when a candidate needs the application.
 bool visitTriangleLeaf(RayQueryState& q) {
     if (q.bottomLevelMotion) return visitMotionTriangleLeaf(q);  // once per leaf, not per triangle
     const TriangleRecord* records = triangles(q.bottomLevel);
@@ -265,20 +275,9 @@ bool testAabb(RayQueryState& q, const AabbRecord& box) {
     const bool opaque = resolveOpacity((box.flags & kAabbOpaque) != 0, instanceFlags, q.flags);
     if (culledByOpacity(opaque, q.flags)) return false;
 
-    QueryHit& c = q.candidate;
-    c.type = kCandidateAabb;
-    c.t = tEnter;
-    c.barycentrics[0] = c.barycentrics[1] = 0.0f;
-    c.frontFace = false;
+    QueryHit& c = startCandidate(q, kCandidateAabb, tEnter);
     c.aabbOpaque = opaque;
-    c.instance = q.instance;
-    c.triangle = nullptr;
     c.aabb = &box;
-    c.sphere = nullptr;
-    c.lss = nullptr;
-    c.lssHitValue = 0.0f;
-    std::memcpy(c.objectOrigin, q.objectRay.org, sizeof c.objectOrigin);
-    std::memcpy(c.objectDirection, q.objectRay.dir, sizeof c.objectDirection);
     q.candidatePending = true;
     return true;
 }
@@ -312,20 +311,10 @@ TriangleOutcome testSwept(RayQueryState& q, const SphereRecord* sphere, const Ls
     const bool opaque = resolveOpacity((recordFlags & kSweptOpaque) != 0, instanceFlags, q.flags);
     if (culledByOpacity(opaque, q.flags)) return TriangleOutcome::None;
 
-    QueryHit& c = q.candidate;
-    c.type = kCandidateTriangle;
-    c.t = t;
-    c.barycentrics[0] = c.barycentrics[1] = 0.0f;
-    c.frontFace = false;
-    c.aabbOpaque = false;
-    c.instance = q.instance;
-    c.triangle = nullptr;
-    c.aabb = nullptr;
+    QueryHit& c = startCandidate(q, kCandidateTriangle, t);
     c.sphere = sphere;
     c.lss = lss;
     c.lssHitValue = u;
-    std::memcpy(c.objectOrigin, q.objectRay.org, sizeof c.objectOrigin);
-    std::memcpy(c.objectDirection, q.objectRay.dir, sizeof c.objectDirection);
     if (opaque) {
         commit(q, c, kCommittedTriangle);
         return TriangleOutcome::Committed;
