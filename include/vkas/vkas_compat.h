@@ -82,6 +82,24 @@ typedef struct VkAccelerationStructureGeometrySpheresDataNV {
 } VkAccelerationStructureGeometrySpheresDataNV;
 #endif
 
+/* VK_KHR_ray_tracing_maintenance1 (header 1.3.213): the two acceleration-structure query types vkas answers in
+ * vkWriteAccelerationStructuresPropertiesKHR. */
+#ifndef VK_KHR_ray_tracing_maintenance1
+#define VK_KHR_ray_tracing_maintenance1 1
+#define VK_KHR_RAY_TRACING_MAINTENANCE_1_SPEC_VERSION 1
+#define VK_KHR_RAY_TRACING_MAINTENANCE_1_EXTENSION_NAME "VK_KHR_ray_tracing_maintenance1"
+#define VK_QUERY_TYPE_ACCELERATION_STRUCTURE_SERIALIZATION_BOTTOM_LEVEL_POINTERS_KHR ((VkQueryType)1000386000)
+#define VK_QUERY_TYPE_ACCELERATION_STRUCTURE_SIZE_KHR ((VkQueryType)1000386001)
+#endif
+
+/* VK_ERROR_INCOMPATIBLE_VERSION_KHR: the result the provisional VK_KHR_ray_tracing (v8/v9) gave for serialized
+ * acceleration-structure data of an incompatible version. The final extension dropped it (loading incompatible data
+ * is invalid usage, VUID-VkCopyMemoryToAccelerationStructureInfoKHR-pInfo-03414); vkas still returns it from
+ * vkCopyMemoryToAccelerationStructureKHR for data whose UUIDs it does not load (docs/API.md). */
+#ifndef VK_ERROR_INCOMPATIBLE_VERSION_KHR
+#define VK_ERROR_INCOMPATIBLE_VERSION_KHR ((VkResult)-1000150000)
+#endif
+
 /* The provisional name of VkAccelerationStructureBuildRangeInfoKHR (VK_KHR_ray_tracing v8/v9, 2020): same four
  * uint32_t members in the same order. vkas follows the final rules for it (docs/API.md, "The provisional name"). */
 #ifndef VKAS_NO_PROVISIONAL_NAMES

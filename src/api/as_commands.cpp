@@ -1,19 +1,24 @@
 // vkCreate/DestroyAccelerationStructureKHR, the address and size queries, and vkBuildAccelerationStructuresKHR:
 // valid-usage checks first (nothing is written when one fails), then the engine builds on plain memory.
+#include <algorithm>
 #include <cinttypes>
+#include <memory>
 #include <new>
 #include <unordered_set>
 
+#include "api/deferred_operation.hpp"
 #include "api/device.hpp"
 #include "api/entry_points.hpp"
 #include "api/limits.hpp"
 #include "api/sphere_validation.hpp"
+#include "api/update_validation.hpp"
 #include "api/validation.hpp"
 #include "engine/as_build.hpp"
 #include "engine/build_sizes.hpp"
 #include "engine/format.hpp"
 #include "engine/geometry_fetch.hpp"
 #include "engine/motion.hpp"
+#include "engine/refit.hpp"
 #include "engine/vertex_format.hpp"
 
 namespace vkas::entry {
@@ -397,21 +402,10 @@ void checkBuildInfo(Validator& v, const Device& dev, const VkAccelerationStructu
                 break;
         }
     }
-    if (info.mode == VK_BUILD_ACCELERATION_STRUCTURE_MODE_UPDATE_KHR) {
-        const auto* src =
-            dev.live<AccelerationStructure>(info.srcAccelerationStructure, ObjectMagic::AccelerationStructure);
-        if (v.check(src != nullptr, "VUID-vkBuildAccelerationStructuresKHR-pInfos-04630",
-                    "%s.mode is UPDATE but srcAccelerationStructure is not a live VkAccelerationStructureKHR.", where)) {
-            const std::byte* block = src->block();
-            const auto* h = block ? format::header(block) : nullptr;
-            bool built = src->constructed && h && h->magic == format::kMagic;
-            if (v.check(built, "VUID-vkBuildAccelerationStructuresKHR-pInfos-03667",
-                        "%s.srcAccelerationStructure has not been built.", where))
-                v.check(h->buildFlags & VK_BUILD_ACCELERATION_STRUCTURE_ALLOW_UPDATE_BIT_KHR,
-                        "VUID-vkBuildAccelerationStructuresKHR-pInfos-03667",
-                        "%s.srcAccelerationStructure was not built with ALLOW_UPDATE.", where);
-        }
-    }
+    // UPDATE: the source, and what must match its last build (update_validation.hpp).
+    const std::byte* updateSrc = info.mode == VK_BUILD_ACCELERATION_STRUCTURE_MODE_UPDATE_KHR
+                                     ? checkUpdateSource(v, dev, info, ranges, dst, where)
+                                     : nullptr;
     if (info.pGeometries == nullptr && info.ppGeometries == nullptr && info.geometryCount != 0) return;
     if (!ranges) return;
     uint64_t total = 0;
@@ -548,9 +542,12 @@ void checkBuildInfo(Validator& v, const Device& dev, const VkAccelerationStructu
     if (dst && info.type != VK_ACCELERATION_STRUCTURE_TYPE_GENERIC_KHR) {
         StructureSizes sizes =
             structureSizes(structureType(info.type), info.geometryCount, total, usesMotionRecords(info));
-        v.check(dst->size >= sizes.structureSize, "VUID-vkBuildAccelerationStructuresKHR-pInfos-10126",
-                "%s.dstAccelerationStructure has size %llu but the build needs %llu.", where, (ull)dst->size,
-                (ull)sizes.structureSize);
+        // An update may also go into a structure of the source's compacted size: a refit writes usedSize bytes.
+        const uint64_t needed =
+            updateSrc ? std::min(sizes.structureSize, format::header(updateSrc)->usedSize) : sizes.structureSize;
+        v.check(dst->size >= needed, "VUID-vkBuildAccelerationStructuresKHR-pInfos-10126",
+                "%s.dstAccelerationStructure has size %llu but the %s needs %llu.", where, (ull)dst->size,
+                updateSrc ? "update" : "build", (ull)needed);
         uint64_t scratchSize = info.mode == VK_BUILD_ACCELERATION_STRUCTURE_MODE_UPDATE_KHR ? sizes.updateScratchSize
                                                                                             : sizes.buildScratchSize;
         if (scratchSize != 0) {
@@ -568,6 +565,7 @@ void checkBuildInfo(Validator& v, const Device& dev, const VkAccelerationStructu
             }
         }
     }
+    checkUpdateData(v, info, ranges, updateSrc, where);
 }
 
 }  // namespace
@@ -582,9 +580,14 @@ VKAPI_ATTR VkResult VKAPI_CALL BuildAccelerationStructuresKHR(
         if (!v.check(dev != nullptr, "VUID-vkBuildAccelerationStructuresKHR-device-parameter",
                      "device is not a valid VkDevice."))
             return VK_ERROR_VALIDATION_FAILED_EXT;
-        v.check(deferredOperation == VK_NULL_HANDLE,
-                "VUID-vkBuildAccelerationStructuresKHR-deferredOperation-parameter",
-                "deferredOperation is not a valid VkDeferredOperationKHR.");
+        if (deferredOperation != VK_NULL_HANDLE) {
+            const auto* op = dev->live<DeferredOperation>(deferredOperation, ObjectMagic::DeferredOperation);
+            if (v.check(op != nullptr, "VUID-vkBuildAccelerationStructuresKHR-deferredOperation-parameter",
+                        "deferredOperation is not a valid VkDeferredOperationKHR."))
+                v.check(!const_cast<DeferredOperation*>(op)->pending(),
+                        "VUID-vkBuildAccelerationStructuresKHR-deferredOperation-03678",
+                        "deferredOperation still has a deferred command pending: join it until it completes first.");
+        }
         v.check(infoCount > 0, "VUID-vkBuildAccelerationStructuresKHR-infoCount-arraylength", "infoCount is 0.");
         v.check(pInfos != nullptr || infoCount == 0, "VUID-vkBuildAccelerationStructuresKHR-pInfos-parameter",
                 "pInfos is NULL.");
@@ -602,23 +605,65 @@ VKAPI_ATTR VkResult VKAPI_CALL BuildAccelerationStructuresKHR(
         }
         for (uint32_t i = 0; i < infoCount; ++i) {
             if (pInfos[i].mode != VK_BUILD_ACCELERATION_STRUCTURE_MODE_UPDATE_KHR) continue;
-            for (uint32_t j = 0; j < infoCount; ++j)
-                v.check(j == i || pInfos[i].srcAccelerationStructure != pInfos[j].dstAccelerationStructure,
-                        "VUID-vkBuildAccelerationStructuresKHR-dstAccelerationStructure-03403",
-                        "pInfos[%u].srcAccelerationStructure is the destination of pInfos[%u].", i, j);
+            const auto* src = dev->live<AccelerationStructure>(pInfos[i].srcAccelerationStructure,
+                                                               ObjectMagic::AccelerationStructure);
+            for (uint32_t j = 0; j < infoCount; ++j) {
+                if (j == i) continue;
+                if (!v.check(pInfos[i].srcAccelerationStructure != pInfos[j].dstAccelerationStructure,
+                             "VUID-vkBuildAccelerationStructuresKHR-dstAccelerationStructure-03403",
+                             "pInfos[%u].srcAccelerationStructure is the destination of pInfos[%u].", i, j))
+                    continue;
+                const auto* dst = dev->live<AccelerationStructure>(pInfos[j].dstAccelerationStructure,
+                                                                   ObjectMagic::AccelerationStructure);
+                if (src && dst && src->block() && dst->block())
+                    v.check(!blockSpan(dst).overlaps(blockSpan(src)),
+                            "VUID-vkBuildAccelerationStructuresKHR-dstAccelerationStructure-03701",
+                            "the memory of pInfos[%u].dstAccelerationStructure overlaps pInfos[%u]'s update source.",
+                            j, i);
+            }
         }
         if (v.failed()) return VK_ERROR_VALIDATION_FAILED_EXT;
     }
-    VkResult result = VK_SUCCESS;
-    for (uint32_t i = 0; i < infoCount; ++i) {
+    // One info's work; `parallel` spreads a build over the threads joined to a deferred operation.
+    auto runInfo = [pInfos, ppBuildRangeInfos](uint32_t i, const ParallelFor* parallel) {
         auto* dst = fromHandle<AccelerationStructure>(pInfos[i].dstAccelerationStructure);
-        BuildJob job{&pInfos[i], ppBuildRangeInfos[i], dst->block(), dst->size, resolveAccelerationStructure};
-        VkResult r = buildAccelerationStructure(job);
-        if (r == VK_SUCCESS)
-            dst->constructed = true;
-        else
-            result = r;
+        VkResult r;
+        if (pInfos[i].mode == VK_BUILD_ACCELERATION_STRUCTURE_MODE_UPDATE_KHR) {
+            // A refit of the source's tree (engine/refit.hpp); src == dst refits in place.
+            const auto* src = fromHandle<AccelerationStructure>(pInfos[i].srcAccelerationStructure);
+            const std::byte* srcBlock = src ? src->block() : nullptr;
+            RefitJob job{&pInfos[i], ppBuildRangeInfos[i], srcBlock, dst->block(), dst->size,
+                         resolveAccelerationStructure};
+            r = srcBlock && job.dst ? refitAccelerationStructure(job) : VK_ERROR_UNKNOWN;
+        } else {
+            BuildJob job{&pInfos[i], ppBuildRangeInfos[i], dst->block(), dst->size, resolveAccelerationStructure,
+                         parallel};
+            r = buildAccelerationStructure(job);
+        }
+        if (r == VK_SUCCESS) dst->constructed = true;
+        return r;
+    };
+    if (deferredOperation != VK_NULL_HANDLE) {
+        // Nothing runs now: each info becomes a task of the operation, run by the threads that join it.
+        auto* op = fromHandle<DeferredOperation>(deferredOperation);
+        auto results = std::make_shared<std::vector<VkResult>>(infoCount, VK_SUCCESS);
+        std::vector<DeferredOperation::Task> tasks;
+        uint64_t primitives = 0;
+        for (uint32_t i = 0; i < infoCount; ++i) {
+            tasks.push_back([=] { (*results)[i] = runInfo(i, &op->parallelFor()); });
+            for (uint32_t g = 0; g < pInfos[i].geometryCount; ++g) primitives += ppBuildRangeInfos[i][g].primitiveCount;
+        }
+        const uint32_t hint = uint32_t(std::min<uint64_t>(infoCount + primitives / 4096, 256));
+        op->start(std::move(tasks), [results] {
+            for (VkResult r : *results)
+                if (r != VK_SUCCESS) return r;
+            return VK_SUCCESS;
+        }, hint);
+        return VK_OPERATION_DEFERRED_KHR;
     }
+    VkResult result = VK_SUCCESS;
+    for (uint32_t i = 0; i < infoCount; ++i)
+        if (VkResult r = runInfo(i, nullptr); r != VK_SUCCESS) result = r;
     return result;
 }
 

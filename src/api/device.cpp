@@ -1,5 +1,7 @@
 #include "api/device.hpp"
 
+#include "api/deferred_operation.hpp"
+
 #include "api/validation.hpp"
 #include "engine/format.hpp"
 
@@ -41,17 +43,34 @@ bool Device::isLive(const void* object) const {
     return objects_.count(object) != 0;
 }
 
+AccelerationStructure* Device::structureAtAddress(uint64_t address) const {
+    if (address == 0) return nullptr;
+    std::lock_guard lock(mutex_);
+    for (const void* o : objects_) {
+        auto* p = static_cast<AccelerationStructure*>(const_cast<void*>(o));
+        if (*static_cast<const ObjectMagic*>(o) == ObjectMagic::AccelerationStructure &&
+            reinterpret_cast<uintptr_t>(p->block()) == address)
+            return p;
+    }
+    return nullptr;
+}
+
 size_t Device::releaseAll() {
     std::lock_guard lock(mutex_);
-    std::vector<void*> structures, buffers, memories;
+    std::vector<void*> structures, buffers, memories, operations;
     for (const void* o : objects_) {
         auto* p = const_cast<void*>(o);
         switch (*static_cast<ObjectMagic*>(p)) {
             case ObjectMagic::AccelerationStructure: structures.push_back(p); break;
             case ObjectMagic::Buffer: buffers.push_back(p); break;
             case ObjectMagic::Memory: memories.push_back(p); break;
+            case ObjectMagic::DeferredOperation: operations.push_back(p); break;
             default: break;
         }
+    }
+    for (void* p : operations) {
+        static_cast<DeferredOperation*>(p)->magic = ObjectMagic::Dead;
+        delete static_cast<DeferredOperation*>(p);
     }
     for (void* p : structures) {
         static_cast<AccelerationStructure*>(p)->magic = ObjectMagic::Dead;

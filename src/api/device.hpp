@@ -33,6 +33,10 @@ public:
     // vkasDestroyDevice) and returns how many there were.
     size_t releaseAll();
 
+    // The live acceleration structure whose device address (the host address of its block) is `address`, or
+    // nullptr (deserialization maps handle-array entries given as addresses to handles).
+    AccelerationStructure* structureAtAddress(uint64_t address) const;
+
     template <class T>
     T* live(const void* handle, ObjectMagic magic) const {
         if (!handle || !isLive(handle)) return nullptr;

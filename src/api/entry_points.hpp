@@ -20,6 +20,14 @@ VKAPI_ATTR void VKAPI_CALL UnmapMemory(VkDevice, VkDeviceMemory);
 VKAPI_ATTR VkDeviceAddress VKAPI_CALL GetBufferDeviceAddress(VkDevice, const VkBufferDeviceAddressInfo*);
 VKAPI_ATTR void VKAPI_CALL DestroyDevice(VkDevice, const VkAllocationCallbacks*);
 
+// Deferred host operations (deferred_operation.cpp).
+VKAPI_ATTR VkResult VKAPI_CALL CreateDeferredOperationKHR(VkDevice, const VkAllocationCallbacks*,
+                                                          VkDeferredOperationKHR*);
+VKAPI_ATTR void VKAPI_CALL DestroyDeferredOperationKHR(VkDevice, VkDeferredOperationKHR, const VkAllocationCallbacks*);
+VKAPI_ATTR uint32_t VKAPI_CALL GetDeferredOperationMaxConcurrencyKHR(VkDevice, VkDeferredOperationKHR);
+VKAPI_ATTR VkResult VKAPI_CALL GetDeferredOperationResultKHR(VkDevice, VkDeferredOperationKHR);
+VKAPI_ATTR VkResult VKAPI_CALL DeferredOperationJoinKHR(VkDevice, VkDeferredOperationKHR);
+
 // Acceleration structures (as_commands.cpp).
 VKAPI_ATTR void VKAPI_CALL GetAccelerationStructureBuildSizesKHR(VkDevice, VkAccelerationStructureBuildTypeKHR,
                                                                  const VkAccelerationStructureBuildGeometryInfoKHR*,
@@ -35,5 +43,19 @@ GetAccelerationStructureDeviceAddressKHR(VkDevice, const VkAccelerationStructure
 VKAPI_ATTR VkResult VKAPI_CALL BuildAccelerationStructuresKHR(VkDevice, VkDeferredOperationKHR, uint32_t,
                                                               const VkAccelerationStructureBuildGeometryInfoKHR*,
                                                               const VkAccelerationStructureBuildRangeInfoKHR* const*);
+
+// Copies, serialization (copy_commands.cpp) and property queries (query_commands.cpp).
+VKAPI_ATTR VkResult VKAPI_CALL CopyAccelerationStructureKHR(VkDevice, VkDeferredOperationKHR,
+                                                            const VkCopyAccelerationStructureInfoKHR*);
+VKAPI_ATTR VkResult VKAPI_CALL CopyAccelerationStructureToMemoryKHR(VkDevice, VkDeferredOperationKHR,
+                                                                    const VkCopyAccelerationStructureToMemoryInfoKHR*);
+VKAPI_ATTR VkResult VKAPI_CALL CopyMemoryToAccelerationStructureKHR(VkDevice, VkDeferredOperationKHR,
+                                                                    const VkCopyMemoryToAccelerationStructureInfoKHR*);
+VKAPI_ATTR VkResult VKAPI_CALL WriteAccelerationStructuresPropertiesKHR(VkDevice, uint32_t,
+                                                                        const VkAccelerationStructureKHR*, VkQueryType,
+                                                                        size_t, void*, size_t);
+VKAPI_ATTR void VKAPI_CALL GetDeviceAccelerationStructureCompatibilityKHR(VkDevice,
+                                                                          const VkAccelerationStructureVersionInfoKHR*,
+                                                                          VkAccelerationStructureCompatibilityKHR*);
 
 }  // namespace vkas::entry

@@ -15,6 +15,7 @@ enum class ObjectMagic : uint32_t {
     Memory = 0x4D454D31,                 // "MEM1"
     Buffer = 0x42554631,                 // "BUF1"
     AccelerationStructure = 0x41435331,  // "ACS1"
+    DeferredOperation = 0x44464F31,      // "DFO1"
     Dead = 0xDEADDEAD,
 };
 

@@ -26,11 +26,21 @@ const ProcEntry kProcs[] = {
     VKAS_PROC("vkGetBufferDeviceAddress", GetBufferDeviceAddress),
     VKAS_PROC("vkGetBufferDeviceAddressKHR", GetBufferDeviceAddress),
     VKAS_PROC("vkDestroyDevice", DestroyDevice),
+    VKAS_PROC("vkCreateDeferredOperationKHR", CreateDeferredOperationKHR),
+    VKAS_PROC("vkDestroyDeferredOperationKHR", DestroyDeferredOperationKHR),
+    VKAS_PROC("vkGetDeferredOperationMaxConcurrencyKHR", GetDeferredOperationMaxConcurrencyKHR),
+    VKAS_PROC("vkGetDeferredOperationResultKHR", GetDeferredOperationResultKHR),
+    VKAS_PROC("vkDeferredOperationJoinKHR", DeferredOperationJoinKHR),
     VKAS_PROC("vkGetAccelerationStructureBuildSizesKHR", GetAccelerationStructureBuildSizesKHR),
     VKAS_PROC("vkCreateAccelerationStructureKHR", CreateAccelerationStructureKHR),
     VKAS_PROC("vkDestroyAccelerationStructureKHR", DestroyAccelerationStructureKHR),
     VKAS_PROC("vkGetAccelerationStructureDeviceAddressKHR", GetAccelerationStructureDeviceAddressKHR),
     VKAS_PROC("vkBuildAccelerationStructuresKHR", BuildAccelerationStructuresKHR),
+    VKAS_PROC("vkCopyAccelerationStructureKHR", CopyAccelerationStructureKHR),
+    VKAS_PROC("vkCopyAccelerationStructureToMemoryKHR", CopyAccelerationStructureToMemoryKHR),
+    VKAS_PROC("vkCopyMemoryToAccelerationStructureKHR", CopyMemoryToAccelerationStructureKHR),
+    VKAS_PROC("vkWriteAccelerationStructuresPropertiesKHR", WriteAccelerationStructuresPropertiesKHR),
+    VKAS_PROC("vkGetDeviceAccelerationStructureCompatibilityKHR", GetDeviceAccelerationStructureCompatibilityKHR),
 };
 #undef VKAS_PROC
 

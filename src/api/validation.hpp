@@ -22,7 +22,12 @@ public:
     // Checks `ok`; reports when it is false. Returns ok.
     template <class... Args>
     bool check(bool ok, const char* vuid, const char* format, Args... args) {
-        if (!ok) fail(vuid, format, args...);
+        if (!ok) {
+            if constexpr (sizeof...(Args) == 0)
+                fail(vuid, "%s", format);  // a message without arguments is printed as is
+            else
+                fail(vuid, format, args...);
+        }
         return ok;
     }
 

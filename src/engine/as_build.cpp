@@ -1,13 +1,16 @@
 #include "engine/as_build.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <vector>
 
 #include "engine/build_sizes.hpp"
 #include "engine/bvh_builder.hpp"
 #include "engine/format.hpp"
 #include "engine/geometry_fetch.hpp"
 #include "engine/motion.hpp"
+#include "engine/refit.hpp"
 #include "engine/sphere_fetch.hpp"
 
 namespace vkas {
@@ -87,6 +90,10 @@ void writeGeometryDescs(std::byte* dst, const BuildJob& job) {
             d.indexType = geom.geometry.triangles.indexType;
             d.maxVertex = geom.geometry.triangles.maxVertex;
             d.hasTransform = geom.geometry.triangles.transformData.hostAddress != nullptr;
+            // What an update must compare its index values against (VUID 03768).
+            if ((info.flags & VK_BUILD_ACCELERATION_STRUCTURE_ALLOW_UPDATE_BIT_KHR) &&
+                geom.geometry.triangles.indexType != VK_INDEX_TYPE_NONE_KHR)
+                d.indexHash = referencedIndexHash(geom.geometry.triangles, job.ranges[g]);
         }
         std::memcpy(dst + sizeof(Header) + g * sizeof(GeometryDesc), &d, sizeof d);
     }
@@ -125,21 +132,38 @@ Aabb instanceWorldBounds(const RawInstance& inst, const std::byte* blas) {
 }
 
 // Fetches the active triangles of every triangle geometry into temp[] and refs[]; returns how many.
+// Triangle number k of the build (geometries in order) is fetched into temp[k] by chunks, on several threads when
+// the job has a ParallelFor; then the refs of the kept triangles are packed in order. refs[j].index names the
+// triangle's temp slot, so the output does not depend on the chunking.
 uint32_t gatherTriangles(const BuildJob& job, PrimRef* refs, TriangleRecord* temp) {
     const auto& info = *job.info;
     const bool keepDegenerate = (info.flags & VK_BUILD_ACCELERATION_STRUCTURE_ALLOW_UPDATE_BIT_KHR) != 0;
-    uint32_t n = 0;
+    struct Chunk {
+        uint32_t geometry, begin, end;
+        uint64_t base;  // build-wide number of the geometry's first triangle
+    };
+    constexpr uint32_t kChunk = 16384;
+    std::vector<Chunk> chunks;
+    uint64_t base = 0;
     for (uint32_t g = 0; g < info.geometryCount; ++g) {
-        const auto& geom = buildGeometry(info, g);
-        if (geom.geometryType != VK_GEOMETRY_TYPE_TRIANGLES_KHR) continue;
-        TriangleSource source(geom.geometry.triangles, job.ranges[g]);
+        const uint32_t count = job.ranges[g].primitiveCount;
+        if (buildGeometry(info, g).geometryType == VK_GEOMETRY_TYPE_TRIANGLES_KHR)
+            for (uint32_t b = 0; b < count; b += kChunk) chunks.push_back({g, b, std::min(count, b + kChunk), base});
+        base += count;
+    }
+    auto fetchChunk = [&](uint32_t c) {
+        const Chunk& ch = chunks[c];
+        const auto& geom = buildGeometry(info, ch.geometry);
+        TriangleSource source(geom.geometry.triangles, job.ranges[ch.geometry]);
         uint32_t flags = 0;
         if (geom.flags & VK_GEOMETRY_OPAQUE_BIT_KHR) flags |= kTriangleOpaque;
         if (geom.flags & VK_GEOMETRY_NO_DUPLICATE_ANY_HIT_INVOCATION_BIT_KHR) flags |= kTriangleNoDuplicateAnyHit;
-        for (uint32_t i = 0; i < source.primitiveCount(); ++i) {
-            TriangleRecord rec;
+        for (uint32_t i = ch.begin; i < ch.end; ++i) {
+            const uint64_t k = ch.base + i;
+            TriangleRecord& rec = temp[k];
+            refs[k].pad = 0;  // not kept
             if (!source.fetch(i, rec.v)) continue;  // inactive: never hit, never updated back to life
-            rec.geometryIndex = g;
+            rec.geometryIndex = ch.geometry;
             rec.primitiveIndex = i;
             rec.flags = flags;
             if (isDegenerateTriangle(rec.v)) {
@@ -148,11 +172,21 @@ uint32_t gatherTriangles(const BuildJob& job, PrimRef* refs, TriangleRecord* tem
             }
             Aabb b;
             for (auto& v : rec.v) b.extend(Vec3{v[0], v[1], v[2]});
-            temp[n] = rec;
-            setRef(refs[n], n, b);
-            ++n;
+            setRef(refs[k], uint32_t(k), b);
+            refs[k].pad = 1;  // kept
         }
-    }
+    };
+    if (job.parallel && chunks.size() > 1)
+        (*job.parallel)(uint32_t(chunks.size()), fetchChunk);
+    else
+        for (uint32_t c = 0; c < chunks.size(); ++c) fetchChunk(c);
+    uint32_t n = 0;
+    for (const Chunk& ch : chunks)
+        for (uint64_t k = ch.base + ch.begin; k < ch.base + ch.end; ++k)
+            if (refs[k].pad) {
+                refs[n] = refs[k];
+                refs[n++].pad = 0;
+            }
     return n;
 }
 
@@ -260,12 +294,22 @@ VkResult buildBottomLevel(const BuildJob& job) {
                            : gatherTriangles(job, refs, reinterpret_cast<TriangleRecord*>(temp));
     StructureLayout pre = structureLayout(StructureType::BottomLevel, info.geometryCount, 0, 0);
     auto* nodes = reinterpret_cast<Node*>(job.dst + pre.nodeOffset);
-    BvhBuildResult tree = buildWideBvh(refs, n, {maxLeafSize(StructureType::BottomLevel)}, nodes);
+    BvhBuildResult tree = buildWideBvh(refs, n, {maxLeafSize(StructureType::BottomLevel)}, nodes, job.parallel);
     StructureLayout layout =
         structureLayout(StructureType::BottomLevel, info.geometryCount, tree.nodeCount, n, motion);
     std::byte* records = job.dst + layout.recordOffset;
-    for (uint32_t i = 0; i < n; ++i)
-        std::memcpy(records + uint64_t(i) * kRecordSize, temp + uint64_t(refs[i].index) * kRecordSize, kRecordSize);
+    auto copyRecords = [&](uint32_t begin, uint32_t end) {
+        for (uint32_t i = begin; i < end; ++i)
+            std::memcpy(records + uint64_t(i) * kRecordSize, temp + uint64_t(refs[i].index) * kRecordSize,
+                        kRecordSize);
+    };
+    constexpr uint32_t kCopyChunk = 65536;
+    if (job.parallel && n > 2 * kCopyChunk)
+        (*job.parallel)((n + kCopyChunk - 1) / kCopyChunk, [&](uint32_t c) {
+            copyRecords(c * kCopyChunk, std::min(n, (c + 1) * kCopyChunk));
+        });
+    else
+        copyRecords(0, n);
     writeGeometryDescs(job.dst, job);
     clearGaps(job.dst, info.geometryCount, tree.nodeCount, layout);
     writeHeader(job.dst, StructureType::BottomLevel, primitiveType, info, total, tree, n, layout);
@@ -296,33 +340,8 @@ VkResult buildMotionTopLevel(const BuildJob& job) {
             const std::byte* blas = job.resolver ? job.resolver(inst.reference) : nullptr;
             if (!blas) continue;  // not a structure (invalid usage, reported by validation)
             MotionInstanceRecord rec;
-            std::memset(&rec, 0, sizeof rec);
-            if (inst.type == motion::kStatic) {
-                std::memcpy(rec.base.objectToWorld, inst.staticTransform, sizeof rec.base.objectToWorld);
-                Affine3x4d inv;
-                invertAffine(affineFromFloat(inst.staticTransform), inv);
-                for (int r = 0; r < 3; ++r)
-                    for (int c = 0; c < 4; ++c) rec.base.worldToObject[r][c] = float(inv.m[r][c]);
-            } else {
-                rec.base.motionType = inst.type;
-                std::memcpy(rec.motion, inst.motion, sizeof rec.motion);
-                if (inst.type == motion::kMatrix) std::memset(rec.motion + 24, 0, 8 * sizeof(float));
-                motion::instanceTransformsAt(rec.base, 0.0f, rec.base.objectToWorld, rec.base.worldToObject);
-            }
-            rec.base.customIndexAndMask = inst.customIndexAndMask;
-            rec.base.sbtOffsetAndFlags = inst.sbtOffsetAndFlags;
-            rec.base.reference = inst.reference;
-            rec.base.instanceId = i;
-            // The bottom level's bounds; an empty one is a point at the object-space origin (degenerate instance).
-            const Header* h = header(blas);
-            double boxLo[3] = {0, 0, 0}, boxHi[3] = {0, 0, 0};
-            if (h->bounds[0] <= h->bounds[3] && h->bounds[1] <= h->bounds[4] && h->bounds[2] <= h->bounds[5])
-                for (int c = 0; c < 3; ++c) boxLo[c] = h->bounds[c], boxHi[c] = h->bounds[3 + c];
-            double lo[3], hi[3];
-            motion::instanceBounds(inst.type, inst.staticTransform, inst.motion, boxLo, boxHi, lo, hi);
             Aabb b;
-            b.lower = {roundDown(lo[0]), roundDown(lo[1]), roundDown(lo[2])};
-            b.upper = {roundUp(hi[0]), roundUp(hi[1]), roundUp(hi[2])};
+            makeMotionInstanceRecord(inst, i, blas, rec, b);
             temp[n] = rec;
             setRef(refs[n], n, b);
             ++n;
@@ -330,7 +349,7 @@ VkResult buildMotionTopLevel(const BuildJob& job) {
     }
     StructureLayout pre = structureLayout(StructureType::TopLevel, info.geometryCount, 0, 0, true);
     auto* nodes = reinterpret_cast<Node*>(job.dst + pre.nodeOffset);
-    BvhBuildResult tree = buildWideBvh(refs, n, {maxLeafSize(StructureType::TopLevel)}, nodes);
+    BvhBuildResult tree = buildWideBvh(refs, n, {maxLeafSize(StructureType::TopLevel)}, nodes, job.parallel);
     StructureLayout layout = structureLayout(StructureType::TopLevel, info.geometryCount, tree.nodeCount, n, true);
     auto* records = reinterpret_cast<MotionInstanceRecord*>(job.dst + layout.recordOffset);
     for (uint32_t i = 0; i < n; ++i) records[i] = temp[refs[i].index];
@@ -362,24 +381,16 @@ VkResult buildTopLevel(const BuildJob& job) {
             const std::byte* blas = job.resolver ? job.resolver(inst.reference) : nullptr;
             if (!blas) continue;  // not a structure (invalid usage, reported by validation)
             InstanceRecord rec;
-            std::memset(&rec, 0, sizeof rec);
-            std::memcpy(rec.objectToWorld, inst.transform, sizeof rec.objectToWorld);
-            Affine3x4d inv;
-            invertAffine(affineFromFloat(inst.transform), inv);
-            for (int r = 0; r < 3; ++r)
-                for (int c = 0; c < 4; ++c) rec.worldToObject[r][c] = float(inv.m[r][c]);
-            rec.customIndexAndMask = inst.customIndexAndMask;
-            rec.sbtOffsetAndFlags = inst.sbtOffsetAndFlags;
-            rec.reference = inst.reference;
-            rec.instanceId = i;
+            Aabb b;
+            makeInstanceRecord(inst, i, blas, rec, b);
             temp[n] = rec;
-            setRef(refs[n], n, instanceWorldBounds(inst, blas));
+            setRef(refs[n], n, b);
             ++n;
         }
     }
     StructureLayout pre = structureLayout(StructureType::TopLevel, info.geometryCount, 0, 0);
     auto* nodes = reinterpret_cast<Node*>(job.dst + pre.nodeOffset);
-    BvhBuildResult tree = buildWideBvh(refs, n, {maxLeafSize(StructureType::TopLevel)}, nodes);
+    BvhBuildResult tree = buildWideBvh(refs, n, {maxLeafSize(StructureType::TopLevel)}, nodes, job.parallel);
     StructureLayout layout = structureLayout(StructureType::TopLevel, info.geometryCount, tree.nodeCount, n);
     auto* records = reinterpret_cast<InstanceRecord*>(job.dst + layout.recordOffset);
     for (uint32_t i = 0; i < n; ++i) records[i] = temp[refs[i].index];
@@ -390,6 +401,51 @@ VkResult buildTopLevel(const BuildJob& job) {
 }
 
 }  // namespace
+
+void makeInstanceRecord(const RawInstance& inst, uint32_t instanceId, const std::byte* blas, InstanceRecord& rec,
+                        Aabb& box) {
+    std::memset(&rec, 0, sizeof rec);
+    std::memcpy(rec.objectToWorld, inst.transform, sizeof rec.objectToWorld);
+    Affine3x4d inv;
+    invertAffine(affineFromFloat(inst.transform), inv);
+    for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 4; ++c) rec.worldToObject[r][c] = float(inv.m[r][c]);
+    rec.customIndexAndMask = inst.customIndexAndMask;
+    rec.sbtOffsetAndFlags = inst.sbtOffsetAndFlags;
+    rec.reference = inst.reference;
+    rec.instanceId = instanceId;
+    box = instanceWorldBounds(inst, blas);
+}
+
+void makeMotionInstanceRecord(const motion::RawMotionInstance& inst, uint32_t instanceId, const std::byte* blas,
+                              MotionInstanceRecord& rec, Aabb& box) {
+    std::memset(&rec, 0, sizeof rec);
+    if (inst.type == motion::kStatic) {
+        std::memcpy(rec.base.objectToWorld, inst.staticTransform, sizeof rec.base.objectToWorld);
+        Affine3x4d inv;
+        invertAffine(affineFromFloat(inst.staticTransform), inv);
+        for (int r = 0; r < 3; ++r)
+            for (int c = 0; c < 4; ++c) rec.base.worldToObject[r][c] = float(inv.m[r][c]);
+    } else {
+        rec.base.motionType = inst.type;
+        std::memcpy(rec.motion, inst.motion, sizeof rec.motion);
+        if (inst.type == motion::kMatrix) std::memset(rec.motion + 24, 0, 8 * sizeof(float));
+        motion::instanceTransformsAt(rec.base, 0.0f, rec.base.objectToWorld, rec.base.worldToObject);
+    }
+    rec.base.customIndexAndMask = inst.customIndexAndMask;
+    rec.base.sbtOffsetAndFlags = inst.sbtOffsetAndFlags;
+    rec.base.reference = inst.reference;
+    rec.base.instanceId = instanceId;
+    // The bottom level's bounds; an empty one is a point at the object-space origin (degenerate instance).
+    const Header* h = header(blas);
+    double boxLo[3] = {0, 0, 0}, boxHi[3] = {0, 0, 0};
+    if (h->bounds[0] <= h->bounds[3] && h->bounds[1] <= h->bounds[4] && h->bounds[2] <= h->bounds[5])
+        for (int c = 0; c < 3; ++c) boxLo[c] = h->bounds[c], boxHi[c] = h->bounds[3 + c];
+    double lo[3], hi[3];
+    motion::instanceBounds(inst.type, inst.staticTransform, inst.motion, boxLo, boxHi, lo, hi);
+    box.lower = {roundDown(lo[0]), roundDown(lo[1]), roundDown(lo[2])};
+    box.upper = {roundUp(hi[0]), roundUp(hi[1]), roundUp(hi[2])};
+}
 
 VkResult buildAccelerationStructure(const BuildJob& job) {
     if (job.info->type == VK_ACCELERATION_STRUCTURE_TYPE_TOP_LEVEL_KHR) return buildTopLevel(job);

@@ -7,6 +7,13 @@
 #include <cstddef>
 #include <cstdint>
 
+#include "engine/bvh_builder.hpp"
+
+#include "engine/format.hpp"
+#include "engine/geometry_fetch.hpp"
+#include "engine/math.hpp"
+#include "engine/motion.hpp"
+
 namespace vkas {
 
 // Turns an instance's accelerationStructureReference into the block of the bottom-level structure it names,
@@ -19,6 +26,7 @@ struct BuildJob {
     std::byte* dst;                                           // start of the destination block
     uint64_t dstSize;                                         // bytes available at dst
     BlasResolver resolver;
+    const ParallelFor* parallel = nullptr;  // spreads the build over threads (deferred operations); output unchanged
 };
 
 const VkAccelerationStructureGeometryKHR& buildGeometry(const VkAccelerationStructureBuildGeometryInfoKHR& info,
@@ -31,5 +39,13 @@ bool usesMotionRecords(const VkAccelerationStructureBuildGeometryInfoKHR& info);
 
 // Returns VK_SUCCESS, or VK_ERROR_UNKNOWN when the destination cannot hold the result (nothing written then).
 VkResult buildAccelerationStructure(const BuildJob& job);
+
+// The record of active instance `instanceId` and its world-space box (the bottom level `blas`'s bounds
+// transformed, rounded outwards), exactly as a top-level build stores them; shared with the refit (refit.hpp).
+void makeInstanceRecord(const RawInstance& inst, uint32_t instanceId, const std::byte* blas,
+                        format::InstanceRecord& rec, Aabb& box);
+// [NV-motion] The same for a motion top level: the box holds the instance over the time range [0, 1].
+void makeMotionInstanceRecord(const motion::RawMotionInstance& inst, uint32_t instanceId, const std::byte* blas,
+                              format::MotionInstanceRecord& rec, Aabb& box);
 
 }  // namespace vkas

@@ -37,7 +37,7 @@ StructureSizes structureSizes(format::StructureType type, uint32_t geometryCount
     s.structureSize = structureLayout(type, geometryCount, nodes, primitiveCount, motion).end;
     s.buildScratchSize =
         primitiveCount == 0 ? 0 : kScratchAlignment + primitiveCount * (sizeof(PrimRef) + recordSize(type, motion));
-    s.updateScratchSize = s.buildScratchSize;  // an update rebuilds from its inputs for now
+    s.updateScratchSize = 0;  // a refit works in the structure itself (engine/refit.hpp)
     return s;
 }
 

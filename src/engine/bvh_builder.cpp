@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <limits>
+#include <memory>
+#include <vector>
 
 namespace vkas {
 
@@ -36,10 +38,23 @@ inline Vec3 refCentroid2(const PrimRef& r) {
 
 class WideBuilder {
 public:
-    WideBuilder(PrimRef* refs, const BvhBuildSettings& s, Node* nodes) : refs_(refs), settings_(s), nodes_(nodes) {}
+    WideBuilder(PrimRef* refs, const BvhBuildSettings& s, Node* nodes, const ParallelFor* parallel = nullptr)
+        : refs_(refs), settings_(s), nodes_(nodes), parallel_(parallel) {}
+
+    // With a deferral threshold, ranges of at most that many primitives (but more than a leaf) are not built:
+    // they are recorded in deferred() and their place is a placeholder reference, deferredRef(k).
+    void deferRangesUpTo(uint32_t threshold) { deferThreshold_ = threshold; }
+    const std::vector<Range>& deferred() const { return deferred_; }
+    static constexpr uint64_t kDeferredKind = 3;  // a ChildRef kind the format never uses
+    static ChildRef deferredRef(uint64_t k) { return (kDeferredKind << format::kKindShift) | k; }
+    static bool isDeferred(ChildRef r) { return (r >> format::kKindShift) == kDeferredKind; }
 
     ChildRef build(const Range& r) {
         if (r.count() <= settings_.maxLeafSize) return format::makeLeafRef(r.begin, r.count());
+        if (r.count() <= deferThreshold_) {
+            deferred_.push_back(r);
+            return deferredRef(deferred_.size() - 1);
+        }
         uint32_t index = nodeCount_++;
         Range children[format::kNodeWidth];
         uint32_t n = 1;
@@ -80,14 +95,47 @@ public:
     uint32_t nodeCount() const { return nodeCount_; }
 
 private:
-    void finishRange(Range& r) {
-        r.bounds = Aabb{};
-        r.centroids = Aabb{};
-        for (uint32_t i = r.begin; i < r.end; ++i) {
-            r.bounds.extend(refLower(refs_[i]));
-            r.bounds.extend(refUpper(refs_[i]));
-            r.centroids.extend(refCentroid2(refs_[i]));
+    struct Bins {
+        Aabb bounds[3][kBins];
+        uint32_t count[3][kBins] = {};
+        void merge(const Bins& o) {
+            for (int a = 0; a < 3; ++a)
+                for (int b = 0; b < kBins; ++b) bounds[a][b].extend(o.bounds[a][b]), count[a][b] += o.count[a][b];
         }
+    };
+    struct RangeBounds {
+        Aabb bounds, centroids;
+        void merge(const RangeBounds& o) { bounds.extend(o.bounds), centroids.extend(o.centroids); }
+    };
+
+    // Runs fn over [begin, end) chunks of r into `out`: in one go, or in parallel chunks merged afterwards when the
+    // range is large and the builder has a ParallelFor. Only for reductions whose merge is exact (sums, min/max).
+    template <typename Acc, typename Fn>
+    void forChunks(const Range& r, const Fn& fn, Acc& out) {
+        constexpr uint32_t kChunk = 16384;
+        if (!parallel_ || r.count() < 4 * kChunk) {
+            fn(r.begin, r.end, out);
+            return;
+        }
+        const uint32_t chunks = (r.count() + kChunk - 1) / kChunk;
+        std::vector<Acc> partial(chunks);
+        (*parallel_)(chunks, [&](uint32_t c) {
+            fn(r.begin + c * kChunk, std::min(r.end, r.begin + (c + 1) * kChunk), partial[c]);
+        });
+        for (const Acc& p : partial) out.merge(p);
+    }
+
+    void finishRange(Range& r) {
+        RangeBounds rb;
+        forChunks(r, [&](uint32_t begin, uint32_t end, RangeBounds& local) {
+            for (uint32_t i = begin; i < end; ++i) {
+                local.bounds.extend(refLower(refs_[i]));
+                local.bounds.extend(refUpper(refs_[i]));
+                local.centroids.extend(refCentroid2(refs_[i]));
+            }
+        }, rb);
+        r.bounds = rb.bounds;
+        r.centroids = rb.centroids;
     }
 
     void halve(const Range& r, Range& left, Range& right) {
@@ -108,22 +156,26 @@ private:
         float scale[3];
         for (int a = 0; a < 3; ++a) scale[a] = extent[a] > 0 ? (kBins * 0.99999f) / extent[a] : 0.0f;
 
-        Aabb binBounds[3][kBins];
-        uint32_t binCount[3][kBins] = {};
         auto binOf = [&](const PrimRef& p, int a) {
             float f = (p.lower[a] + p.upper[a] - cl[a]) * scale[a];
             // Written so that NaN or infinite coordinates (invalid input) still land in a valid bin.
             return f >= 1.0f ? (f < float(kBins) ? int(f) : kBins - 1) : 0;
         };
-        for (uint32_t i = r.begin; i < r.end; ++i) {
-            const PrimRef& p = refs_[i];
-            for (int a = 0; a < 3; ++a) {
-                int b = binOf(p, a);
-                binCount[a][b]++;
-                binBounds[a][b].extend(refLower(p));
-                binBounds[a][b].extend(refUpper(p));
+        Bins bins;
+        // Counts are sums and bounds are min/max, so chunked binning merged in any order gives the same bins.
+        forChunks(r, [&](uint32_t begin, uint32_t end, Bins& local) {
+            for (uint32_t i = begin; i < end; ++i) {
+                const PrimRef& p = refs_[i];
+                for (int a = 0; a < 3; ++a) {
+                    int b = binOf(p, a);
+                    local.count[a][b]++;
+                    local.bounds[a][b].extend(refLower(p));
+                    local.bounds[a][b].extend(refUpper(p));
+                }
             }
-        }
+        }, bins);
+        auto& binCount = bins.count;
+        auto& binBounds = bins.bounds;
         float bestCost = std::numeric_limits<float>::infinity();
         int bestAxis = -1, bestBin = -1;
         for (int a = 0; a < 3; ++a) {
@@ -174,12 +226,91 @@ private:
     PrimRef* refs_;
     BvhBuildSettings settings_;
     Node* nodes_;
+    const ParallelFor* parallel_;  // for binning and bounds of large ranges
     uint32_t nodeCount_ = 0;
+    uint32_t deferThreshold_ = 0;
+    std::vector<Range> deferred_;
 };
+
+// A subtree built on its own: its nodes in pre-order from local index 0, and its root reference.
+struct Subtree {
+    ChildRef root = format::kEmptyRef;
+    std::vector<Node> nodes;
+};
+
+// Lays out a top part (built with placeholders) and the separately built subtrees in the serial build's order:
+// pre-order, a node's index before its children's subtrees, children in slot order.
+class Assembler {
+public:
+    Assembler(const Node* top, const std::vector<Subtree>& subtrees, Node* out)
+        : top_(top), subtrees_(subtrees), out_(out) {}
+
+    ChildRef place(ChildRef ref) {
+        if (WideBuilder::isDeferred(ref)) return placeSubtree(subtrees_[uint32_t(ref & 0xFFFF'FFFFu)]);
+        if (!format::isInternal(ref)) return ref;
+        const uint32_t index = next_++;
+        Node node = top_[format::nodeIndex(ref)];
+        for (uint32_t i = 0; i < format::kNodeWidth; ++i)
+            if (node.child[i] != format::kEmptyRef) node.child[i] = place(node.child[i]);
+        out_[index] = node;
+        return format::makeInternalRef(index);
+    }
+    uint32_t nodeCount() const { return next_; }
+
+private:
+    // A subtree's nodes are already in pre-order: shift them as one block.
+    ChildRef placeSubtree(const Subtree& sub) {
+        if (!format::isInternal(sub.root)) return sub.root;
+        const uint32_t base = next_;
+        for (const Node& n : sub.nodes) {
+            Node node = n;
+            for (ChildRef& c : node.child)
+                if (format::isInternal(c)) c = format::makeInternalRef(format::nodeIndex(c) + base);
+            out_[next_++] = node;
+        }
+        return format::makeInternalRef(base + format::nodeIndex(sub.root));
+    }
+
+    const Node* top_;
+    const std::vector<Subtree>& subtrees_;
+    Node* out_;
+    uint32_t next_ = 0;
+};
+
+// Ranges at or below this many primitives become independent tasks: large enough to amortise a task, small
+// enough that a million primitives give hundreds of them.
+constexpr uint32_t kParallelGrain = 2048;
+
+// Builds the tree over r in parallel: the first node (and any child range over half of r) here, each other child
+// range as a task that does the same, down to kParallelGrain; then lays it all out as the serial build would.
+void buildSubtree(PrimRef* refs, const Range& r, const BvhBuildSettings& settings, const ParallelFor& parallel,
+                  Subtree& out) {
+    if (r.count() <= kParallelGrain) {
+        out.nodes.resize(size_t(maxWideNodeCount(r.count(), settings.maxLeafSize)));
+        WideBuilder builder(refs, settings, out.nodes.data());
+        out.root = builder.build(r);
+        out.nodes.resize(builder.nodeCount());
+        return;
+    }
+    std::vector<Node> top(size_t(maxWideNodeCount(r.count(), settings.maxLeafSize)));
+    WideBuilder topBuilder(refs, settings, top.data(), &parallel);
+    topBuilder.deferRangesUpTo(std::max(kParallelGrain, r.count() / 2));
+    const ChildRef topRoot = topBuilder.build(r);
+    const std::vector<Range>& ranges = topBuilder.deferred();
+    std::vector<Subtree> subtrees(ranges.size());
+    parallel(uint32_t(ranges.size()),
+             [&](uint32_t k) { buildSubtree(refs, ranges[k], settings, parallel, subtrees[k]); });
+    size_t total = topBuilder.nodeCount();
+    for (const Subtree& sub : subtrees) total += sub.nodes.size();
+    out.nodes.resize(total);
+    Assembler assembler(top.data(), subtrees, out.nodes.data());
+    out.root = assembler.place(topRoot);
+}
 
 }  // namespace
 
-BvhBuildResult buildWideBvh(PrimRef* refs, uint32_t n, const BvhBuildSettings& settings, Node* nodes) {
+BvhBuildResult buildWideBvh(PrimRef* refs, uint32_t n, const BvhBuildSettings& settings, Node* nodes,
+                            const ParallelFor* parallel) {
     BvhBuildResult result;
     if (n == 0) return result;
     Range all;
@@ -189,10 +320,18 @@ BvhBuildResult buildWideBvh(PrimRef* refs, uint32_t n, const BvhBuildSettings& s
         all.bounds.extend(refUpper(refs[i]));
         all.centroids.extend(refCentroid2(refs[i]));
     }
-    WideBuilder builder(refs, settings, nodes);
-    result.root = builder.build(all);
-    result.nodeCount = builder.nodeCount();
     result.bounds = all.bounds;
+    if (!parallel || n <= 2 * kParallelGrain) {
+        WideBuilder builder(refs, settings, nodes);
+        result.root = builder.build(all);
+        result.nodeCount = builder.nodeCount();
+        return result;
+    }
+    Subtree tree;
+    buildSubtree(refs, all, settings, *parallel, tree);
+    std::copy(tree.nodes.begin(), tree.nodes.end(), nodes);
+    result.root = tree.root;
+    result.nodeCount = uint32_t(tree.nodes.size());
     return result;
 }
 

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 
 #include "engine/format.hpp"
 #include "engine/math.hpp"
@@ -29,10 +30,17 @@ struct BvhBuildResult {
     Aabb bounds;
 };
 
+// Runs fn(i) for every i in [0, count), possibly on several threads, and returns when all have run. Supplied by the
+// API layer (deferred host operations); the builder's output does not depend on how the calls are scheduled.
+using ParallelFor = std::function<void(uint32_t count, const std::function<void(uint32_t)>& fn)>;
+
 // Upper bound on the nodes buildWideBvh writes for n primitives (docs/FORMAT.md derives it).
 uint64_t maxWideNodeCount(uint64_t n, uint32_t maxLeafSize);
 
 // Builds over refs[0..n) (reordered in place: leaves refer to ranges of refs) into nodes[0..nodeCount).
-BvhBuildResult buildWideBvh(PrimRef* refs, uint32_t n, const BvhBuildSettings& settings, format::Node* nodes);
+// With `parallel`, subtrees below a size threshold are built as independent tasks and then laid out in the
+// order the serial build uses, so the nodes and refs are byte-identical to a build without it.
+BvhBuildResult buildWideBvh(PrimRef* refs, uint32_t n, const BvhBuildSettings& settings, format::Node* nodes,
+                            const ParallelFor* parallel = nullptr);
 
 }  // namespace vkas

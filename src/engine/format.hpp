@@ -74,7 +74,9 @@ struct GeometryDesc {
     uint32_t indexType;     // triangles: VkIndexType
     uint32_t maxVertex;
     uint32_t hasTransform;
-    uint32_t reserved;
+    // Indexed triangles of an ALLOW_UPDATE build: a hash of the index values the build read (refit.hpp,
+    // referencedIndexHash), so an update can check VUID 03768 without a copy of the indices. Otherwise 0.
+    uint32_t indexHash;
 };
 static_assert(sizeof(GeometryDesc) == 32);
 

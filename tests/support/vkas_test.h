@@ -51,7 +51,12 @@ struct Rng {
     X(vkCreateAccelerationStructureKHR)             \
     X(vkDestroyAccelerationStructureKHR)            \
     X(vkGetAccelerationStructureDeviceAddressKHR)   \
-    X(vkBuildAccelerationStructuresKHR)
+    X(vkBuildAccelerationStructuresKHR)             \
+    X(vkCopyAccelerationStructureKHR)               \
+    X(vkCopyAccelerationStructureToMemoryKHR)       \
+    X(vkCopyMemoryToAccelerationStructureKHR)       \
+    X(vkWriteAccelerationStructuresPropertiesKHR)   \
+    X(vkGetDeviceAccelerationStructureCompatibilityKHR)
 
 struct Commands {
 #define VT_DECLARE(name) PFN_##name name = nullptr;

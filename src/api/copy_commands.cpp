@@ -1,0 +1,309 @@
+// vkCopyAccelerationStructureKHR (CLONE, COMPACT), vkCopyAccelerationStructureToMemoryKHR (SERIALIZE) and
+// vkCopyMemoryToAccelerationStructureKHR (DESERIALIZE): valid-usage checks first (nothing is written when one
+// fails), then the work functions of copy_commands.hpp on plain memory.
+#include "api/copy_commands.hpp"
+
+#include "api/deferred_operation.hpp"
+
+#include <cinttypes>
+#include <cstring>
+#include <unordered_map>
+
+#include "api/entry_points.hpp"
+#include "api/validation.hpp"
+#include "engine/format.hpp"
+#include "engine/format_check.hpp"
+#include "engine/serialize.hpp"
+
+namespace vkas {
+
+namespace {
+
+using ull = unsigned long long;
+
+uint64_t load64(const void* p) {
+    uint64_t v;
+    std::memcpy(&v, p, 8);
+    return v;
+}
+
+bool rangesOverlap(uintptr_t a, uint64_t aSize, uintptr_t b, uint64_t bSize) {
+    return aSize != 0 && bSize != 0 && a < b + bSize && b < a + aSize;
+}
+
+// The readable extent the application promises for a serialized blob: its header's serialized size (at least the
+// header itself, which every blob has).
+uint64_t blobExtent(const void* src) {
+    return std::max<uint64_t>(serial::kHeaderSize,
+                              load64(static_cast<const std::byte*>(src) + serial::kSerializedSizeOffset));
+}
+
+struct MapContext {
+    const Device* device;
+    std::unordered_map<uint64_t, uint64_t> cache;
+};
+
+uint64_t mapCached(const void* context, uint64_t value) {
+    auto* ctx = static_cast<MapContext*>(const_cast<void*>(context));
+    auto it = ctx->cache.find(value);
+    if (it != ctx->cache.end()) return it->second;
+    const uint64_t mapped = mapSerializedReference(*ctx->device, value);
+    ctx->cache.emplace(value, mapped);
+    return mapped;
+}
+
+}  // namespace
+
+const std::byte* constructedBlock(const AccelerationStructure& as) {
+    const std::byte* block = as.block();
+    if (!as.constructed || !block || as.size < sizeof(format::Header)) return nullptr;
+    format::Header h;
+    std::memcpy(&h, block, sizeof h);
+    if (h.magic != format::kMagic || h.usedSize < sizeof h || h.usedSize > as.size) return nullptr;
+    return block;
+}
+
+uint64_t mapSerializedReference(const Device& device, uint64_t value) {
+    if (value == 0) return 0;
+    if (device.live<AccelerationStructure>(reinterpret_cast<const void*>(value), ObjectMagic::AccelerationStructure))
+        return value;
+    if (const AccelerationStructure* as = device.structureAtAddress(value)) return reinterpret_cast<uint64_t>(as);
+    return 0;
+}
+
+VkResult copyAccelerationStructure(const AccelerationStructure& src, AccelerationStructure& dst) {
+    const std::byte* from = constructedBlock(src);
+    std::byte* to = dst.block();
+    if (!from || !to) return VK_ERROR_UNKNOWN;
+    const uint64_t size = serial::compactedSize(from);
+    if (size > dst.size) return VK_ERROR_UNKNOWN;
+    serial::copyBlock(from, to);
+    dst.constructed = true;
+    return VK_SUCCESS;
+}
+
+VkResult serializeAccelerationStructure(const AccelerationStructure& src, void* dst) {
+    const std::byte* block = constructedBlock(src);
+    if (!block || !dst) return VK_ERROR_UNKNOWN;
+    if (rangesOverlap(reinterpret_cast<uintptr_t>(dst), serial::serializedSize(block),
+                      reinterpret_cast<uintptr_t>(block), serial::compactedSize(block)))
+        return VK_ERROR_UNKNOWN;
+    serial::serializeBlock(block, static_cast<std::byte*>(dst));
+    return VK_SUCCESS;
+}
+
+VkResult deserializeAccelerationStructure(const Device& device, const void* src, AccelerationStructure& dst) {
+    if (!src) return VK_ERROR_UNKNOWN;
+    serial::SerializedView view;
+    const format::CheckResult check =
+        format::checkSerialized(static_cast<const std::byte*>(src), blobExtent(src), &view);
+    if (check.status == format::CheckStatus::Incompatible) return VK_ERROR_INCOMPATIBLE_VERSION_KHR;
+    if (!check.ok()) return VK_ERROR_UNKNOWN;
+    std::byte* to = dst.block();
+    if (!to || dst.size < view.deserializedSize) return VK_ERROR_UNKNOWN;
+    if (rangesOverlap(reinterpret_cast<uintptr_t>(src), view.serializedSize, reinterpret_cast<uintptr_t>(to),
+                      view.deserializedSize))
+        return VK_ERROR_UNKNOWN;
+    MapContext context{&device, {}};
+    serial::deserializeBlock(view, to, &mapCached, &context);
+    dst.constructed = true;
+    return VK_SUCCESS;
+}
+
+}  // namespace vkas
+
+namespace vkas::entry {
+
+namespace {
+using ull = unsigned long long;
+
+const AccelerationStructure* liveStructure(const Device* dev, VkAccelerationStructureKHR handle) {
+    return dev ? dev->live<AccelerationStructure>(handle, ObjectMagic::AccelerationStructure) : nullptr;
+}
+}  // namespace
+
+VKAPI_ATTR VkResult VKAPI_CALL CopyAccelerationStructureKHR(VkDevice device, VkDeferredOperationKHR deferredOperation,
+                                                            const VkCopyAccelerationStructureInfoKHR* pInfo) {
+    Device* dev = Device::fromHandle(device);
+    Validator v(dev, "vkCopyAccelerationStructureKHR");
+    if (v.enabled()) {
+        if (!v.check(dev != nullptr, "VUID-vkCopyAccelerationStructureKHR-device-parameter",
+                     "device is not a valid VkDevice."))
+            return VK_ERROR_VALIDATION_FAILED_EXT;
+        checkDeferredOperation(v, *dev, deferredOperation, "vkCopyAccelerationStructureKHR");
+        if (!v.check(pInfo != nullptr, "VUID-vkCopyAccelerationStructureKHR-pInfo-parameter", "pInfo is NULL."))
+            return VK_ERROR_VALIDATION_FAILED_EXT;
+        v.check(pInfo->sType == VK_STRUCTURE_TYPE_COPY_ACCELERATION_STRUCTURE_INFO_KHR,
+                "VUID-VkCopyAccelerationStructureInfoKHR-sType-sType", "pInfo->sType is %d.", int(pInfo->sType));
+        v.check(pInfo->pNext == nullptr, "VUID-VkCopyAccelerationStructureInfoKHR-pNext-pNext",
+                "pInfo->pNext is not NULL.");
+        const bool modeKnown = pInfo->mode >= VK_COPY_ACCELERATION_STRUCTURE_MODE_CLONE_KHR &&
+                               pInfo->mode <= VK_COPY_ACCELERATION_STRUCTURE_MODE_DESERIALIZE_KHR;
+        v.check(modeKnown, "VUID-VkCopyAccelerationStructureInfoKHR-mode-parameter",
+                "pInfo->mode %d is not a VkCopyAccelerationStructureModeKHR.", int(pInfo->mode));
+        const bool compact = pInfo->mode == VK_COPY_ACCELERATION_STRUCTURE_MODE_COMPACT_KHR;
+        if (modeKnown)
+            v.check(compact || pInfo->mode == VK_COPY_ACCELERATION_STRUCTURE_MODE_CLONE_KHR,
+                    "VUID-VkCopyAccelerationStructureInfoKHR-mode-03410", "pInfo->mode is %d, not CLONE or COMPACT.",
+                    int(pInfo->mode));
+        const AccelerationStructure* src = liveStructure(dev, pInfo->src);
+        const AccelerationStructure* dst = liveStructure(dev, pInfo->dst);
+        v.check(src != nullptr, "VUID-VkCopyAccelerationStructureInfoKHR-src-parameter",
+                "pInfo->src is not a live VkAccelerationStructureKHR.");
+        v.check(dst != nullptr, "VUID-VkCopyAccelerationStructureInfoKHR-dst-parameter",
+                "pInfo->dst is not a live VkAccelerationStructureKHR.");
+        const std::byte* block = nullptr;
+        if (src && v.check(src->buffer->memory != nullptr, "VUID-vkCopyAccelerationStructureKHR-buffer-03727",
+                           "the buffer of pInfo->src is not bound to memory.")) {
+            block = constructedBlock(*src);
+            v.check(block != nullptr, "VUID-vkCopyAccelerationStructureKHR-src-11586",
+                    "pInfo->src has not been constructed (built, copied or deserialized).");
+        }
+        if (dst)
+            v.check(dst->buffer->memory != nullptr, "VUID-vkCopyAccelerationStructureKHR-buffer-03728",
+                    "the buffer of pInfo->dst is not bound to memory.");
+        if (block) {
+            const format::Header* h = format::header(block);
+            if (compact)
+                v.check(h->buildFlags & VK_BUILD_ACCELERATION_STRUCTURE_ALLOW_COMPACTION_BIT_KHR,
+                        "VUID-VkCopyAccelerationStructureInfoKHR-src-03411",
+                        "pInfo->mode is COMPACT but pInfo->src was not built with ALLOW_COMPACTION.");
+            if (dst && dst->buffer->memory) {
+                const uint64_t need = serial::compactedSize(block);
+                v.check(dst->size >= need,
+                        compact ? "VUID-VkCopyAccelerationStructureInfoKHR-dst-12419"
+                                : "VUID-VkCopyAccelerationStructureInfoKHR-dst-12418",
+                        "pInfo->dst has size %llu but the %s needs %llu bytes (the %s query of pInfo->src).",
+                        (ull)dst->size, compact ? "compacted copy" : "clone", (ull)need,
+                        compact ? "ACCELERATION_STRUCTURE_COMPACTED_SIZE_KHR" : "ACCELERATION_STRUCTURE_SIZE_KHR");
+                v.check(!rangesOverlap(reinterpret_cast<uintptr_t>(dst->block()), need,
+                                       reinterpret_cast<uintptr_t>(block), need),
+                        "VUID-VkCopyAccelerationStructureInfoKHR-dst-07791",
+                        "the memory pInfo->dst would be written overlaps the memory of pInfo->src.");
+            }
+        }
+        if (v.failed()) return VK_ERROR_VALIDATION_FAILED_EXT;
+    }
+    if (!dev || !pInfo) return VK_ERROR_UNKNOWN;
+    auto* src = fromHandle<AccelerationStructure>(pInfo->src);
+    auto* dst = fromHandle<AccelerationStructure>(pInfo->dst);
+    return runOrDefer(deferredOperation, [src, dst] { return copyAccelerationStructure(*src, *dst); });
+}
+
+VKAPI_ATTR VkResult VKAPI_CALL CopyAccelerationStructureToMemoryKHR(
+    VkDevice device, VkDeferredOperationKHR deferredOperation, const VkCopyAccelerationStructureToMemoryInfoKHR* pInfo) {
+    Device* dev = Device::fromHandle(device);
+    Validator v(dev, "vkCopyAccelerationStructureToMemoryKHR");
+    if (v.enabled()) {
+        if (!v.check(dev != nullptr, "VUID-vkCopyAccelerationStructureToMemoryKHR-device-parameter",
+                     "device is not a valid VkDevice."))
+            return VK_ERROR_VALIDATION_FAILED_EXT;
+        checkDeferredOperation(v, *dev, deferredOperation, "vkCopyAccelerationStructureToMemoryKHR");
+        if (!v.check(pInfo != nullptr, "VUID-vkCopyAccelerationStructureToMemoryKHR-pInfo-parameter",
+                     "pInfo is NULL."))
+            return VK_ERROR_VALIDATION_FAILED_EXT;
+        v.check(pInfo->sType == VK_STRUCTURE_TYPE_COPY_ACCELERATION_STRUCTURE_TO_MEMORY_INFO_KHR,
+                "VUID-VkCopyAccelerationStructureToMemoryInfoKHR-sType-sType", "pInfo->sType is %d.",
+                int(pInfo->sType));
+        v.check(pInfo->pNext == nullptr, "VUID-VkCopyAccelerationStructureToMemoryInfoKHR-pNext-pNext",
+                "pInfo->pNext is not NULL.");
+        const bool modeKnown = pInfo->mode >= VK_COPY_ACCELERATION_STRUCTURE_MODE_CLONE_KHR &&
+                               pInfo->mode <= VK_COPY_ACCELERATION_STRUCTURE_MODE_DESERIALIZE_KHR;
+        if (v.check(modeKnown, "VUID-VkCopyAccelerationStructureToMemoryInfoKHR-mode-parameter",
+                    "pInfo->mode %d is not a VkCopyAccelerationStructureModeKHR.", int(pInfo->mode)))
+            v.check(pInfo->mode == VK_COPY_ACCELERATION_STRUCTURE_MODE_SERIALIZE_KHR,
+                    "VUID-VkCopyAccelerationStructureToMemoryInfoKHR-mode-03412", "pInfo->mode is %d, not SERIALIZE.",
+                    int(pInfo->mode));
+        const AccelerationStructure* src = liveStructure(dev, pInfo->src);
+        if (v.check(src != nullptr, "VUID-VkCopyAccelerationStructureToMemoryInfoKHR-src-parameter",
+                    "pInfo->src is not a live VkAccelerationStructureKHR.") &&
+            v.check(src->buffer->memory != nullptr, "VUID-vkCopyAccelerationStructureToMemoryKHR-buffer-03731",
+                    "the buffer of pInfo->src is not bound to memory."))
+            v.check(constructedBlock(*src) != nullptr, "VUID-VkCopyAccelerationStructureToMemoryInfoKHR-src-04959",
+                    "pInfo->src has not been constructed (built, copied or deserialized).");
+        const auto dstAddress = reinterpret_cast<uintptr_t>(pInfo->dst.hostAddress);
+        if (v.check(dstAddress != 0, "VUID-vkCopyAccelerationStructureToMemoryKHR-pInfo-03732",
+                    "pInfo->dst.hostAddress is NULL."))
+            v.check(dstAddress % 16 == 0, "VUID-vkCopyAccelerationStructureToMemoryKHR-pInfo-03751",
+                    "pInfo->dst.hostAddress %p is not a multiple of 16.", pInfo->dst.hostAddress);
+        if (v.failed()) return VK_ERROR_VALIDATION_FAILED_EXT;
+    }
+    if (!dev || !pInfo) return VK_ERROR_UNKNOWN;
+    auto* src = fromHandle<AccelerationStructure>(pInfo->src);
+    void* out = pInfo->dst.hostAddress;
+    return runOrDefer(deferredOperation, [src, out] { return serializeAccelerationStructure(*src, out); });
+}
+
+VKAPI_ATTR VkResult VKAPI_CALL CopyMemoryToAccelerationStructureKHR(
+    VkDevice device, VkDeferredOperationKHR deferredOperation, const VkCopyMemoryToAccelerationStructureInfoKHR* pInfo) {
+    Device* dev = Device::fromHandle(device);
+    Validator v(dev, "vkCopyMemoryToAccelerationStructureKHR");
+    bool incompatible = false;
+    if (v.enabled()) {
+        if (!v.check(dev != nullptr, "VUID-vkCopyMemoryToAccelerationStructureKHR-device-parameter",
+                     "device is not a valid VkDevice."))
+            return VK_ERROR_VALIDATION_FAILED_EXT;
+        checkDeferredOperation(v, *dev, deferredOperation, "vkCopyMemoryToAccelerationStructureKHR");
+        if (!v.check(pInfo != nullptr, "VUID-vkCopyMemoryToAccelerationStructureKHR-pInfo-parameter",
+                     "pInfo is NULL."))
+            return VK_ERROR_VALIDATION_FAILED_EXT;
+        v.check(pInfo->sType == VK_STRUCTURE_TYPE_COPY_MEMORY_TO_ACCELERATION_STRUCTURE_INFO_KHR,
+                "VUID-VkCopyMemoryToAccelerationStructureInfoKHR-sType-sType", "pInfo->sType is %d.",
+                int(pInfo->sType));
+        v.check(pInfo->pNext == nullptr, "VUID-VkCopyMemoryToAccelerationStructureInfoKHR-pNext-pNext",
+                "pInfo->pNext is not NULL.");
+        const bool modeKnown = pInfo->mode >= VK_COPY_ACCELERATION_STRUCTURE_MODE_CLONE_KHR &&
+                               pInfo->mode <= VK_COPY_ACCELERATION_STRUCTURE_MODE_DESERIALIZE_KHR;
+        if (v.check(modeKnown, "VUID-VkCopyMemoryToAccelerationStructureInfoKHR-mode-parameter",
+                    "pInfo->mode %d is not a VkCopyAccelerationStructureModeKHR.", int(pInfo->mode)))
+            v.check(pInfo->mode == VK_COPY_ACCELERATION_STRUCTURE_MODE_DESERIALIZE_KHR,
+                    "VUID-VkCopyMemoryToAccelerationStructureInfoKHR-mode-03413",
+                    "pInfo->mode is %d, not DESERIALIZE.", int(pInfo->mode));
+        const AccelerationStructure* dst = liveStructure(dev, pInfo->dst);
+        if (v.check(dst != nullptr, "VUID-VkCopyMemoryToAccelerationStructureInfoKHR-dst-parameter",
+                    "pInfo->dst is not a live VkAccelerationStructureKHR."))
+            v.check(dst->buffer->memory != nullptr, "VUID-vkCopyMemoryToAccelerationStructureKHR-buffer-03730",
+                    "the buffer of pInfo->dst is not bound to memory.");
+        const void* src = pInfo->src.hostAddress;
+        if (v.check(src != nullptr, "VUID-vkCopyMemoryToAccelerationStructureKHR-pInfo-03729",
+                    "pInfo->src.hostAddress is NULL.") &&
+            v.check(reinterpret_cast<uintptr_t>(src) % 16 == 0, "VUID-vkCopyMemoryToAccelerationStructureKHR-pInfo-03750",
+                    "pInfo->src.hostAddress %p is not a multiple of 16.", src)) {
+            serial::SerializedView view;
+            const format::CheckResult check =
+                format::checkSerialized(static_cast<const std::byte*>(src), blobExtent(src), &view);
+            if (check.status == format::CheckStatus::Incompatible) {
+                incompatible = true;
+                v.fail("VUID-VkCopyMemoryToAccelerationStructureInfoKHR-pInfo-03414",
+                       "the data at pInfo->src is not compatible with this device "
+                       "(vkGetDeviceAccelerationStructureCompatibilityKHR returns INCOMPATIBLE): %s.",
+                       check.reason);
+            } else if (!v.check(check.ok(), "VUID-VkCopyMemoryToAccelerationStructureInfoKHR-src-04960",
+                                "the data at pInfo->src is not a serialized acceleration structure: %s.",
+                                check.reason)) {
+            } else {
+                if (dst && dst->buffer->memory)
+                    v.check(dst->size >= view.deserializedSize, "VUID-VkCopyMemoryToAccelerationStructureInfoKHR-dst-03746",
+                            "pInfo->dst has size %llu but the serialized data's deserialized size is %llu.",
+                            (ull)dst->size, (ull)view.deserializedSize);
+                for (uint64_t k = 0; k < view.handleCount; ++k) {
+                    const uint64_t value = load64(view.handles + 8 * k);
+                    if (!v.check(value == 0 || mapSerializedReference(*dev, value) != 0,
+                                 "VUID-VkCopyMemoryToAccelerationStructureInfoKHR-src-04960",
+                                 "entry %llu of the handle array, 0x%llx, is neither a live VkAccelerationStructureKHR "
+                                 "nor the device address of one.",
+                                 (ull)k, (ull)value))
+                        break;
+                }
+            }
+        }
+        if (v.failed()) return incompatible ? VK_ERROR_INCOMPATIBLE_VERSION_KHR : VK_ERROR_VALIDATION_FAILED_EXT;
+    }
+    if (!dev || !pInfo) return VK_ERROR_UNKNOWN;
+    auto* dst = fromHandle<AccelerationStructure>(pInfo->dst);
+    const void* blob = pInfo->src.hostAddress;
+    return runOrDefer(deferredOperation,
+                      [dev, blob, dst] { return deserializeAccelerationStructure(*dev, blob, *dst); });
+}
+
+}  // namespace vkas::entry
