@@ -94,6 +94,23 @@ class host_threading : public VkasTest {
         }
     }
 
+    // The serialized form of a structure (vkCopyAccelerationStructureToMemoryKHR), at a 16-byte aligned address.
+    std::vector<uint8_t> serializedBytes(const AccelStruct* as) {
+        uint64_t size = 0;
+        if (vk.vkWriteAccelerationStructuresPropertiesKHR(device, 1, &as->handle,
+                                                          VK_QUERY_TYPE_ACCELERATION_STRUCTURE_SERIALIZATION_SIZE_KHR,
+                                                          sizeof size, &size, sizeof size) != VK_SUCCESS)
+            return {};
+        std::vector<uint64_t> storage(size_t(size + 7) / 8);
+        VkCopyAccelerationStructureToMemoryInfoKHR info{VK_STRUCTURE_TYPE_COPY_ACCELERATION_STRUCTURE_TO_MEMORY_INFO_KHR};
+        info.src = as->handle;
+        info.dst.hostAddress = storage.data();
+        info.mode = VK_COPY_ACCELERATION_STRUCTURE_MODE_SERIALIZE_KHR;
+        if (vk.vkCopyAccelerationStructureToMemoryKHR(device, VK_NULL_HANDLE, &info) != VK_SUCCESS) return {};
+        const auto* bytes = reinterpret_cast<const uint8_t*>(storage.data());
+        return std::vector<uint8_t>(bytes, bytes + size);
+    }
+
     PFN_vkCreateDeferredOperationKHR vkCreateDeferredOperationKHR = nullptr;
     PFN_vkDestroyDeferredOperationKHR vkDestroyDeferredOperationKHR = nullptr;
     PFN_vkGetDeferredOperationMaxConcurrencyKHR vkGetDeferredOperationMaxConcurrencyKHR = nullptr;
@@ -272,6 +289,118 @@ TEST_F(host_threading, deferred_copy_serialize_deserialize) {
     AccelStruct* loadedTlas = buildSingleInstanceTlas(loaded);
     const auto rays = randomRays(*tlas->scene, 200);
     for (const auto& r : rays) EXPECT_TRUE(identical(traceClosest(tlas, r), traceClosest(loadedTlas, r)));
+    vkDestroyDeferredOperationKHR(device, op, nullptr);
+    EXPECT_TRUE(takeValidationErrors().empty());
+}
+
+// Every geometry type: a deferred build joined by 1, 2, 3, 8 and all hardware threads serializes to the same bytes
+// as the build without deferral (the serialized form holds the whole structure, so equal blobs mean equal
+// structures).
+TEST_F(host_threading, serialized_bytes_independent_of_threads_for_every_geometry_type) {
+    const uint32_t n = 20000;  // above the size at which builds split into tasks
+    std::vector<float> positions, radii, positions1;
+    std::vector<VkAabbPositionsKHR> boxes;
+    for (uint32_t i = 0; i < 3 * n; ++i) {
+        const float x = rng.uniformf(-10, 10), y = rng.uniformf(-10, 10), z = rng.uniformf(-10, 10);
+        positions.insert(positions.end(), {x, y, z});
+        positions1.insert(positions1.end(), {x + rng.uniformf(-0.1f, 0.1f), y, z + rng.uniformf(-0.1f, 0.1f)});
+        radii.push_back(rng.uniformf(0.01f, 0.1f));
+    }
+    for (uint32_t i = 0; i < n; ++i) {
+        const float x = rng.uniformf(-10, 10), y = rng.uniformf(-10, 10), z = rng.uniformf(-10, 10);
+        boxes.push_back({x, y, z, x + rng.uniformf(0.01f, 0.2f), y + rng.uniformf(0.01f, 0.2f), z + rng.uniformf(0.01f, 0.2f)});
+    }
+    struct Kind {
+        const char* name;
+        VkAccelerationStructureGeometryKHR geometry;
+        uint32_t primitives;
+        BuildOptions options;
+    };
+    std::vector<Kind> kinds;
+    VkAccelerationStructureGeometryKHR g{VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_GEOMETRY_KHR};
+    // Triangles: a soup (3 vertices each), and the same with time-1 positions (motion).
+    g.geometryType = VK_GEOMETRY_TYPE_TRIANGLES_KHR;
+    auto& t = g.geometry.triangles;
+    t.sType = VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_GEOMETRY_TRIANGLES_DATA_KHR;
+    t.vertexFormat = VK_FORMAT_R32G32B32_SFLOAT;
+    t.vertexData.hostAddress = positions.data();
+    t.vertexStride = 12;
+    t.maxVertex = 3 * n - 1;
+    t.indexType = VK_INDEX_TYPE_NONE_KHR;
+    kinds.push_back({"triangles", g, n, {}});
+    VkAccelerationStructureGeometryMotionTrianglesDataNV motion{VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_GEOMETRY_MOTION_TRIANGLES_DATA_NV};
+    motion.vertexData.hostAddress = positions1.data();
+    VkAccelerationStructureGeometryKHR gm = g;
+    gm.geometry.triangles.pNext = &motion;
+    BuildOptions motionOptions;
+    motionOptions.flags = VK_BUILD_ACCELERATION_STRUCTURE_MOTION_BIT_NV;
+    motionOptions.createFlags = VK_ACCELERATION_STRUCTURE_CREATE_MOTION_BIT_NV;
+    kinds.push_back({"motion triangles", gm, n, motionOptions});
+    // AABBs.
+    VkAccelerationStructureGeometryKHR ga{VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_GEOMETRY_KHR};
+    ga.geometryType = VK_GEOMETRY_TYPE_AABBS_KHR;
+    ga.geometry.aabbs.sType = VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_GEOMETRY_AABBS_DATA_KHR;
+    ga.geometry.aabbs.data.hostAddress = boxes.data();
+    ga.geometry.aabbs.stride = sizeof(VkAabbPositionsKHR);
+    kinds.push_back({"aabbs", ga, n, {}});
+    // Spheres and linear swept spheres (LIST of pairs without indices).
+    VkAccelerationStructureGeometrySpheresDataNV spheres{VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_GEOMETRY_SPHERES_DATA_NV};
+    spheres.vertexFormat = VK_FORMAT_R32G32B32_SFLOAT;
+    spheres.vertexData.hostAddress = positions.data();
+    spheres.vertexStride = 12;
+    spheres.radiusFormat = VK_FORMAT_R32_SFLOAT;
+    spheres.radiusData.hostAddress = radii.data();
+    spheres.radiusStride = 4;
+    spheres.indexType = VK_INDEX_TYPE_NONE_KHR;
+    VkAccelerationStructureGeometryKHR gs{VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_GEOMETRY_KHR, &spheres};
+    gs.geometryType = VK_GEOMETRY_TYPE_SPHERES_NV;
+    kinds.push_back({"spheres", gs, n, {}});
+    VkAccelerationStructureGeometryLinearSweptSpheresDataNV lss{
+        VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_GEOMETRY_LINEAR_SWEPT_SPHERES_DATA_NV};
+    lss.vertexFormat = VK_FORMAT_R32G32B32_SFLOAT;
+    lss.vertexData.hostAddress = positions.data();
+    lss.vertexStride = 12;
+    lss.radiusFormat = VK_FORMAT_R32_SFLOAT;
+    lss.radiusData.hostAddress = radii.data();
+    lss.radiusStride = 4;
+    lss.indexType = VK_INDEX_TYPE_NONE_KHR;
+    lss.indexingMode = VK_RAY_TRACING_LSS_INDEXING_MODE_LIST_NV;
+    lss.endCapsMode = VK_RAY_TRACING_LSS_PRIMITIVE_END_CAPS_MODE_CHAINED_NV;
+    VkAccelerationStructureGeometryKHR gl{VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_GEOMETRY_KHR, &lss};
+    gl.geometryType = VK_GEOMETRY_TYPE_LINEAR_SWEPT_SPHERES_NV;
+    kinds.push_back({"linear swept spheres", gl, n, {}});
+
+    const uint32_t hardware = std::max(1u, std::thread::hardware_concurrency());
+    VkDeferredOperationKHR op = createOperation();
+    std::vector<AccelStruct*> built;
+    for (const Kind& k : kinds) {
+        SCOPED_TRACE(k.name);
+        VkAccelerationStructureBuildRangeInfoKHR range{k.primitives, 0, 0, 0};
+        AccelStruct* reference = buildBlas({k.geometry}, {range}, k.options);
+        const std::vector<uint8_t> expected = serializedBytes(reference);
+        ASSERT_FALSE(expected.empty());
+        for (uint32_t threads : {1u, 2u, 3u, 8u, hardware}) {
+            auto b = prepareBlas({k.geometry}, {range}, k.options);
+            buildDeferred({b.get()}, op, threads);
+            EXPECT_TRUE(serializedBytes(b->as) == expected) << threads << " joined threads";
+        }
+        built.push_back(reference);
+    }
+    // A top level over all of them, and a motion top level, the same way.
+    std::vector<Instance> instances;
+    for (uint32_t i = 0; i < 12000; ++i) {
+        Instance inst;
+        inst.transform = randomTransform(rng, 0.05f, 0.2f, rng.coin(0.2), 100.0f);
+        inst.blas = built[i % built.size()];
+        instances.push_back(inst);
+    }
+    AccelStruct* referenceTlas = buildTlas(instances);
+    const std::vector<uint8_t> expectedTlas = serializedBytes(referenceTlas);
+    for (uint32_t threads : {1u, 2u, 3u, 8u, hardware}) {
+        auto b = prepareTlas(instances);
+        buildDeferred({b.get()}, op, threads);
+        EXPECT_TRUE(serializedBytes(b->as) == expectedTlas) << "top level, " << threads << " joined threads";
+    }
     vkDestroyDeferredOperationKHR(device, op, nullptr);
     EXPECT_TRUE(takeValidationErrors().empty());
 }

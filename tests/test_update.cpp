@@ -142,6 +142,258 @@ VkAccelerationStructureGeometryKHR aabbGeometry(const std::vector<VkAabbPosition
     return g;
 }
 
+
+// [NV-LSS] One sphere or LSS geometry over plain buffers: R32G32B32_SFLOAT positions, R32_SFLOAT radii, optional
+// UINT32 indices (SUCCESSIVE needs them). Not copyable: the structures point into it.
+struct SweptInput {
+    bool lss = false;
+    std::vector<Float3> positions;
+    std::vector<float> radii;
+    std::vector<uint32_t> indices;
+    uint32_t indexingMode = VK_RAY_TRACING_LSS_INDEXING_MODE_LIST_NV;
+    uint32_t endCapsMode = VK_RAY_TRACING_LSS_PRIMITIVE_END_CAPS_MODE_NONE_NV;
+    VkAccelerationStructureGeometrySpheresDataNV spheres{};
+    VkAccelerationStructureGeometryLinearSweptSpheresDataNV lssData{};
+    VkAccelerationStructureGeometryKHR geometry{};
+    VkAccelerationStructureBuildRangeInfoKHR range{};
+    SweptInput() = default;
+    SweptInput(const SweptInput&) = delete;
+    SweptInput& operator=(const SweptInput&) = delete;
+};
+
+// Points the structures at the buffers (call again after changing a vector's size).
+void wireSwept(SweptInput& d, uint32_t primitiveCount, VkGeometryFlagsKHR flags) {
+    const void* idx = d.indices.empty() ? nullptr : d.indices.data();
+    const VkIndexType it = d.indices.empty() ? VK_INDEX_TYPE_NONE_KHR : VK_INDEX_TYPE_UINT32;
+    d.geometry = VkAccelerationStructureGeometryKHR{VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_GEOMETRY_KHR};
+    d.geometry.flags = flags;
+    if (d.lss) {
+        auto& l = d.lssData;
+        l = VkAccelerationStructureGeometryLinearSweptSpheresDataNV{};
+        l.sType = VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_GEOMETRY_LINEAR_SWEPT_SPHERES_DATA_NV;
+        l.vertexFormat = VK_FORMAT_R32G32B32_SFLOAT;
+        l.vertexData.hostAddress = d.positions.data();
+        l.vertexStride = sizeof(Float3);
+        l.radiusFormat = VK_FORMAT_R32_SFLOAT;
+        l.radiusData.hostAddress = d.radii.data();
+        l.radiusStride = 4;
+        l.indexType = it;
+        l.indexData.hostAddress = idx;
+        l.indexStride = idx ? 4 : 0;
+        l.indexingMode = VkRayTracingLssIndexingModeNV(d.indexingMode);
+        l.endCapsMode = VkRayTracingLssPrimitiveEndCapsModeNV(d.endCapsMode);
+        d.geometry.geometryType = VK_GEOMETRY_TYPE_LINEAR_SWEPT_SPHERES_NV;
+        d.geometry.pNext = &d.lssData;
+    } else {
+        auto& sp = d.spheres;
+        sp = VkAccelerationStructureGeometrySpheresDataNV{};
+        sp.sType = VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_GEOMETRY_SPHERES_DATA_NV;
+        sp.vertexFormat = VK_FORMAT_R32G32B32_SFLOAT;
+        sp.vertexData.hostAddress = d.positions.data();
+        sp.vertexStride = sizeof(Float3);
+        sp.radiusFormat = VK_FORMAT_R32_SFLOAT;
+        sp.radiusData.hostAddress = d.radii.data();
+        sp.radiusStride = 4;
+        sp.indexType = it;
+        sp.indexData.hostAddress = idx;
+        sp.indexStride = idx ? 4 : 0;
+        d.geometry.geometryType = VK_GEOMETRY_TYPE_SPHERES_NV;
+        d.geometry.pNext = &d.spheres;
+    }
+    d.range = {};
+    d.range.primitiveCount = primitiveCount;
+}
+
+// The same geometry (indices, modes, flags, count) with other positions and radii: what an update may change.
+std::unique_ptr<SweptInput> withData(const SweptInput& base, std::vector<Float3> positions, std::vector<float> radii) {
+    auto d = std::make_unique<SweptInput>();
+    d->lss = base.lss;
+    d->positions = std::move(positions);
+    d->radii = std::move(radii);
+    d->indices = base.indices;
+    d->indexingMode = base.indexingMode;
+    d->endCapsMode = base.endCapsMode;
+    wireSwept(*d, base.range.primitiveCount, base.geometry.flags);
+    return d;
+}
+
+// Random spheres (lss = false) or LSS in [-1, 1]^3: some zero radii (degenerate: LSS with both radii zero), some
+// inactive (NaN radius; in SUCCESSIVE mode whole chains: a chain must be all active or all inactive).
+std::unique_ptr<SweptInput> randomSwept(Rng& rng, bool lss, uint32_t indexing, uint32_t caps, uint32_t n) {
+    auto d = std::make_unique<SweptInput>();
+    d->lss = lss;
+    d->indexingMode = lss ? indexing : 0;
+    d->endCapsMode = lss ? caps : 0;
+    auto point = [&] { return Float3{rng.uniformf(-1, 1), rng.uniformf(-1, 1), rng.uniformf(-1, 1)}; };
+    auto radius = [&] { return rng.coin(0.15) ? 0.0f : rng.uniformf(0.03f, 0.15f); };
+    if (!lss) {
+        for (uint32_t i = 0; i < n; ++i) d->positions.push_back(point()), d->radii.push_back(radius());
+        if (rng.coin())
+            for (uint32_t i = 0; i < n; ++i) d->indices.push_back(n - 1 - i);
+        for (float& r : d->radii)
+            if (rng.coin(0.05)) r = kNaN;
+    } else if (indexing == VK_RAY_TRACING_LSS_INDEXING_MODE_SUCCESSIVE_NV) {
+        // Polylines of 1-4 segments separated by an unused vertex, so a chain breaks where an index skips one.
+        uint32_t made = 0;
+        while (made < n) {
+            const uint32_t len = std::min(n - made, 1 + rng.below(4));
+            const bool inactive = rng.coin(0.08);
+            const uint32_t first = uint32_t(d->positions.size());
+            Float3 p = point();
+            for (uint32_t k = 0; k <= len; ++k) {
+                d->positions.push_back(p);
+                d->radii.push_back(inactive ? kNaN : radius());
+                for (float& c : p) c = std::clamp(c + rng.uniformf(-0.3f, 0.3f), -1.0f, 1.0f);
+            }
+            for (uint32_t k = 0; k < len; ++k) d->indices.push_back(first + k);
+            d->positions.push_back(point()), d->radii.push_back(0.5f);  // the unused vertex between chains
+            made += len;
+        }
+        // Some primitives degenerate: both of their radii zero.
+        for (uint32_t i = 0; i < n; ++i)
+            if (rng.coin(0.1) && !std::isnan(d->radii[d->indices[i]]))
+                d->radii[d->indices[i]] = d->radii[d->indices[i] + 1] = 0.0f;
+    } else {
+        for (uint32_t i = 0; i < n; ++i) {
+            Float3 a = point(), b = a;
+            for (float& c : b) c = std::clamp(c + rng.uniformf(-0.4f, 0.4f), -1.0f, 1.0f);
+            float ra = radius(), rb = radius();
+            if (rng.coin(0.1)) ra = rb = 0.0f;  // degenerate
+            if (rng.coin(0.05)) ra = kNaN;      // inactive
+            d->positions.push_back(a), d->radii.push_back(ra);
+            d->positions.push_back(b), d->radii.push_back(rb);
+        }
+        if (rng.coin())
+            for (uint32_t i = 0; i < n; ++i) {
+                const uint32_t p = n - 1 - i;  // reversed pairs, endpoints swapped
+                d->indices.push_back(2 * p + 1), d->indices.push_back(2 * p);
+            }
+    }
+    wireSwept(*d, n, rng.coin() ? VK_GEOMETRY_OPAQUE_BIT_KHR : 0);
+    return d;
+}
+
+// New positions and radii for an update: every vertex moved, radii re-drawn; zero radii get a radius and positive
+// ones lose it now and then (degenerate both ways); NaN (inactive) stays NaN and nothing else becomes NaN.
+std::unique_ptr<SweptInput> movedSwept(const SweptInput& base, Rng& rng, float amount) {
+    std::vector<Float3> pos = base.positions;
+    std::vector<float> radii = base.radii;
+    for (auto& p : pos)
+        for (float& c : p) c += rng.uniformf(-amount, amount);
+    for (float& r : radii) {
+        if (std::isnan(r)) continue;
+        if (r == 0.0f)
+            r = rng.coin(0.6) ? rng.uniformf(0.03f, 0.2f) : 0.0f;
+        else
+            r = rng.coin(0.15) ? 0.0f : rng.uniformf(0.03f, 0.2f);
+    }
+    if (base.lss)  // some primitives degenerate now: both radii zero
+        for (uint32_t i = 0; i < base.range.primitiveCount; ++i) {
+            if (!rng.coin(0.1)) continue;
+            uint32_t v0 = base.indexingMode == VK_RAY_TRACING_LSS_INDEXING_MODE_SUCCESSIVE_NV ? i : 2 * i, v1 = v0 + 1;
+            if (!base.indices.empty()) {
+                v0 = base.indices[v0];
+                v1 = base.indexingMode == VK_RAY_TRACING_LSS_INDEXING_MODE_SUCCESSIVE_NV ? v0 + 1 : base.indices[2 * i + 1];
+            }
+            if (!std::isnan(radii[v0]) && !std::isnan(radii[v1])) radii[v0] = radii[v1] = 0.0f;
+        }
+    return withData(base, std::move(pos), std::move(radii));
+}
+
+// [NV-motion] A triangle geometry with R32G32B32_SFLOAT positions at time 0 and time 1
+// (VkAccelerationStructureGeometryMotionTrianglesDataNV), indexed (UINT32) or not.
+struct MotionInput {
+    std::vector<Float3> v0, v1;
+    std::vector<uint32_t> indices;
+    VkAccelerationStructureGeometryMotionTrianglesDataNV motion{};
+    VkAccelerationStructureGeometryKHR geometry{};
+    VkAccelerationStructureBuildRangeInfoKHR range{};
+    MotionInput() = default;
+    MotionInput(const MotionInput&) = delete;
+    MotionInput& operator=(const MotionInput&) = delete;
+};
+
+std::unique_ptr<MotionInput> makeMotionInput(const Mesh& m, const std::vector<Float3>& at1, bool indexed,
+                                             VkGeometryFlagsKHR flags) {
+    auto g = std::make_unique<MotionInput>();
+    if (indexed) {
+        g->v0 = m.positions, g->v1 = at1, g->indices = m.indices;
+    } else {
+        for (uint32_t i : m.indices) g->v0.push_back(m.positions[i]), g->v1.push_back(at1[i]);
+    }
+    auto& tri = g->geometry.geometry.triangles;
+    g->geometry.sType = VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_GEOMETRY_KHR;
+    g->geometry.geometryType = VK_GEOMETRY_TYPE_TRIANGLES_KHR;
+    g->geometry.flags = flags;
+    tri.sType = VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_GEOMETRY_TRIANGLES_DATA_KHR;
+    tri.vertexFormat = VK_FORMAT_R32G32B32_SFLOAT;
+    tri.vertexStride = sizeof(Float3);
+    tri.vertexData.hostAddress = g->v0.data();
+    tri.maxVertex = uint32_t(g->v0.size() - 1);
+    tri.indexType = indexed ? VK_INDEX_TYPE_UINT32 : VK_INDEX_TYPE_NONE_KHR;
+    if (indexed) tri.indexData.hostAddress = g->indices.data();
+    g->motion.sType = VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_GEOMETRY_MOTION_TRIANGLES_DATA_NV;
+    g->motion.vertexData.hostAddress = g->v1.data();
+    tri.pNext = &g->motion;
+    g->range.primitiveCount = uint32_t(m.triangleCount());
+    return g;
+}
+
+// [NV-motion] One VkAccelerationStructureMotionInstanceNV: type 0 static (m0), 1 matrix (m0 -> m1), 2 SRT (s0 -> s1).
+struct MotionDesc {
+    uint32_t type = 0;
+    VkTransformMatrixKHR m0 = identityTransform(), m1 = identityTransform();
+    VkSRTDataNV s0{}, s1{};
+    uint32_t customIndex = 0, mask = 0xFF, sbtOffset = 0, flags = 0;
+    const AccelStruct* blas = nullptr;  // null: inactive
+};
+
+VkTransformMatrixKHR zRotation(double angle) {
+    VkTransformMatrixKHR m = identityTransform();
+    m.matrix[0][0] = float(std::cos(angle)), m.matrix[0][1] = float(-std::sin(angle));
+    m.matrix[1][0] = float(std::sin(angle)), m.matrix[1][1] = float(std::cos(angle));
+    return m;
+}
+
+VkSRTDataNV randomSrtData(Rng& rng, float maxTranslation) {
+    VkSRTDataNV s{};
+    s.sx = rng.uniformf(0.5f, 1.5f), s.sy = rng.uniformf(0.5f, 1.5f), s.sz = rng.uniformf(0.5f, 1.5f);
+    s.a = rng.uniformf(-0.2f, 0.2f), s.b = rng.uniformf(-0.2f, 0.2f), s.c = rng.uniformf(-0.2f, 0.2f);
+    s.pvx = rng.uniformf(-0.5f, 0.5f), s.pvy = rng.uniformf(-0.5f, 0.5f), s.pvz = rng.uniformf(-0.5f, 0.5f);
+    double q[4], n = 0;
+    for (double& c : q) c = rng.uniform(-1, 1), n += c * c;
+    n = std::sqrt(n);
+    s.qx = float(q[0] / n), s.qy = float(q[1] / n), s.qz = float(q[2] / n), s.qw = float(q[3] / n);
+    s.tx = rng.uniformf(-maxTranslation, maxTranslation);
+    s.ty = rng.uniformf(-maxTranslation, maxTranslation);
+    s.tz = rng.uniformf(-maxTranslation, maxTranslation);
+    return s;
+}
+
+// A random motion instance of `type` over `blas`: matrix motion turns by at most 60 degrees about z and moves
+// (every interpolated matrix stays invertible); SRT motion goes to another SRT whose quaternion is on the same
+// side (the interpolated quaternion never passes near zero).
+MotionDesc randomMotionDesc(Rng& rng, const AccelStruct* blas, uint32_t type) {
+    MotionDesc d;
+    d.type = type;
+    d.blas = blas;
+    d.customIndex = rng.u32() & 0xFFFFFF;
+    d.sbtOffset = rng.u32() & 0xFFFFFF;
+    d.mask = rng.coin(0.8) ? 0xFF : (rng.u32() & 0xFF);
+    if (type != 2) {
+        d.m0 = randomTransform(rng, 0.5f, 1.5f, rng.coin(0.2), 4.0f);
+        d.m1 = type == 0 ? d.m0
+                         : compose(translation(rng.uniformf(-2, 2), rng.uniformf(-2, 2), rng.uniformf(-2, 2)),
+                                   compose(zRotation(rng.uniform(-M_PI / 3, M_PI / 3)), d.m0));
+    } else {
+        d.s0 = randomSrtData(rng, 4.0f);
+        d.s1 = randomSrtData(rng, 4.0f);
+        if (d.s0.qx * d.s1.qx + d.s0.qy * d.s1.qy + d.s0.qz * d.s1.qz + d.s0.qw * d.s1.qw < 0)
+            d.s1.qx = -d.s1.qx, d.s1.qy = -d.s1.qy, d.s1.qz = -d.s1.qz, d.s1.qw = -d.s1.qw;
+    }
+    return d;
+}
+
 }  // namespace
 
 class update : public VkasTest {
@@ -184,6 +436,208 @@ class update : public VkasTest {
         dst->scene = src->scene;
         if (src->blas) blasRegistry[dst->reference()] = src->blas;
         return dst;
+    }
+    // [NV-LSS] Rays at random points inside the hittable spheres / LSS of every instance (from outside, sometimes
+    // from inside), plus, for each active primitive that is degenerate (zero radii), rays exactly through its
+    // centre / endpoints: a zero-radius ball would be met there, so a degenerate record that produced a candidate
+    // would show against the oracle (for which it is never hit).
+    std::vector<oracle::Ray> sweptRays(const oracle::Scene& scene, size_t count) {
+        std::vector<oracle::Ray> rays;
+        struct Target {
+            const oracle::Instance* inst;
+            const oracle::SweptPrimitive* sp;
+        };
+        std::vector<Target> hittable;
+        auto toWorld = [](const oracle::Instance& in, const std::array<double, 3>& p) {
+            oracle::Vec3 w;
+            for (int k = 0; k < 3; ++k)
+                w[k] = in.toWorld[k][0] * p[0] + in.toWorld[k][1] * p[1] + in.toWorld[k][2] * p[2] + in.toWorld[k][3];
+            return w;
+        };
+        for (const auto& in : scene.instances) {
+            if (!in.blas) continue;
+            for (const auto& g : in.blas->geometries)
+                for (const auto& sp : g.swept) {
+                    if (sp.hittable()) {
+                        hittable.push_back({&in, &sp});
+                    } else if (sp.active && sp.r[0] == 0 && sp.r[1] == 0) {
+                        for (int e = 0; e < 2; ++e) {  // straight down through the point (exact in object space)
+                            oracle::Ray r;
+                            const auto w = toWorld(in, {sp.p[e][0], sp.p[e][1], sp.p[e][2] + 3.0});
+                            for (int k = 0; k < 3; ++k) r.origin[k] = float(w[k]);
+                            for (int k = 0; k < 3; ++k) r.direction[k] = float(-in.toWorld[k][2]);
+                            r.tMax = 100;
+                            rays.push_back(r);
+                        }
+                    }
+                }
+        }
+        for (size_t n = 0; n < count && !hittable.empty(); ++n) {
+            const Target& t = hittable[rng.below(uint32_t(hittable.size()))];
+            const double s = rng.uniform(0, 1), rad = (t.sp->r[0] + s * (t.sp->r[1] - t.sp->r[0])) * rng.uniform(0, 0.9);
+            std::array<double, 3> dir, off, p;
+            double dl, ol;
+            do {
+                for (double& x : dir) x = rng.uniform(-1, 1);
+                dl = std::sqrt(dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]);
+            } while (dl > 1 || dl < 1e-2);
+            do {
+                for (double& x : off) x = rng.uniform(-1, 1);
+                ol = std::sqrt(off[0] * off[0] + off[1] * off[1] + off[2] * off[2]);
+            } while (ol > 1 || ol < 1e-2);
+            for (int k = 0; k < 3; ++k) p[k] = t.sp->p[0][k] + s * (t.sp->p[1][k] - t.sp->p[0][k]) + off[k] / ol * rad;
+            const auto w = toWorld(*t.inst, p);
+            const double back = rng.coin(0.1) ? 0.0 : rng.uniform(1.0, 5.0);
+            oracle::Ray r;
+            for (int k = 0; k < 3; ++k) r.origin[k] = float(w[k] - back * dir[k] / dl), r.direction[k] = float(dir[k] / dl);
+            r.tMax = 100;
+            rays.push_back(r);
+        }
+        return rays;
+    }
+    // A sphere / LSS bottom level under one identity instance, against the oracle (closest, any hit, batch, with
+    // and without forced opacity). Returns the query hits.
+    size_t checkSweptBlas(const AccelStruct* blas, size_t rays = 150) {
+        AccelStruct* tlas = buildSingleInstanceTlas(blas);
+        auto r = sweptRays(*tlas->scene, rays);
+        auto more = randomRays(*tlas->scene, rays / 3);
+        r.insert(r.end(), more.begin(), more.end());
+        return checkRays(tlas, r) + checkRays(tlas, r, VKAS_RAY_FLAG_NO_OPAQUE, 0xFF, false);
+    }
+    // How many records a structure stores (Header::recordCount, docs/FORMAT.md).
+    static uint32_t recordCount(const AccelStruct* as) {
+        uint32_t n;
+        std::memcpy(&n, as->data() + 64, 4);
+        return n;
+    }
+
+    // [NV-motion] A motion bottom level build (ALLOW_UPDATE), or an update of `src` into `dst` (nullptr: a fresh
+    // structure; src: in place) when src is given; the oracle knows both times.
+    AccelStruct* motionBlas(const std::vector<const MotionInput*>& inputs, AccelStruct* src = nullptr,
+                            AccelStruct* dst = nullptr) {
+        std::vector<VkAccelerationStructureGeometryKHR> g;
+        std::vector<VkAccelerationStructureBuildRangeInfoKHR> r;
+        for (const auto* m : inputs) g.push_back(m->geometry), r.push_back(m->range);
+        BuildOptions opt;
+        opt.flags = kAllowUpdate | VK_BUILD_ACCELERATION_STRUCTURE_MOTION_BIT_NV;
+        opt.createFlags = VK_ACCELERATION_STRUCTURE_CREATE_MOTION_BIT_NV;
+        auto pb = prepareBlas(g, r, opt);
+        auto later = std::make_shared<oracle::Blas>();
+        for (size_t i = 0; i < g.size(); ++i) later->geometries.push_back(oracle::fetchTrianglesAtTime1(g[i], r[i]));
+        later->computeBounds();
+        pb->blas->atTime1 = later;
+        if (src) return submitUpdate(*pb, src, dst);
+        submit({pb.get()});
+        return pb->as;
+    }
+
+    // [NV-motion] A motion top level of VkAccelerationStructureMotionInstanceNV (160-byte stride), built with
+    // ALLOW_UPDATE, or an update of `src` into `dst` (nullptr: fresh; src: in place). `scene` receives the
+    // oracle's view of the instances as written.
+    AccelStruct* motionTlas(const std::vector<MotionDesc>& descs, oracle::MotionScene& scene, AccelStruct* src = nullptr,
+                            AccelStruct* dst = nullptr) {
+        auto pb = std::make_unique<PreparedBuild>();
+        const size_t n = descs.size(), stride = 160;
+        pb->instanceBytes.assign(stride * n + 16, 0xAA);
+        for (size_t i = 0; i < n; ++i) {
+            const MotionDesc& d = descs[i];
+            VkAccelerationStructureMotionInstanceNV mi;
+            std::memset(&mi, 0, sizeof mi);
+            mi.type = VkAccelerationStructureMotionInstanceTypeNV(d.type);
+            const uint64_t ref = d.blas ? d.blas->reference() : 0;
+            auto common = [&](auto& x) {
+                x.instanceCustomIndex = d.customIndex, x.mask = d.mask;
+                x.instanceShaderBindingTableRecordOffset = d.sbtOffset, x.flags = d.flags;
+                x.accelerationStructureReference = ref;
+            };
+            if (d.type == 0) {
+                mi.data.staticInstance.transform = d.m0;
+                common(mi.data.staticInstance);
+            } else if (d.type == 1) {
+                mi.data.matrixMotionInstance.transformT0 = d.m0, mi.data.matrixMotionInstance.transformT1 = d.m1;
+                common(mi.data.matrixMotionInstance);
+            } else {
+                mi.data.srtMotionInstance.transformT0 = d.s0, mi.data.srtMotionInstance.transformT1 = d.s1;
+                common(mi.data.srtMotionInstance);
+            }
+            std::memcpy(pb->instanceBytes.data() + stride * i, &mi, sizeof mi);
+        }
+        VkAccelerationStructureGeometryKHR g{VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_GEOMETRY_KHR};
+        g.geometryType = VK_GEOMETRY_TYPE_INSTANCES_KHR;
+        g.geometry.instances.sType = VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_GEOMETRY_INSTANCES_DATA_KHR;
+        g.geometry.instances.data.hostAddress = pb->instanceBytes.data();
+        pb->geometries.push_back(g);
+        VkAccelerationStructureBuildRangeInfoKHR range{};
+        range.primitiveCount = uint32_t(n);
+        pb->ranges.push_back(range);
+        auto& info = pb->info;
+        info.sType = VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_BUILD_GEOMETRY_INFO_KHR;
+        info.type = VK_ACCELERATION_STRUCTURE_TYPE_TOP_LEVEL_KHR;
+        info.flags = kAllowUpdate | VK_BUILD_ACCELERATION_STRUCTURE_MOTION_BIT_NV;
+        info.mode = VK_BUILD_ACCELERATION_STRUCTURE_MODE_BUILD_KHR;
+        info.geometryCount = 1;
+        info.pGeometries = pb->geometries.data();
+        const uint32_t maxCount = uint32_t(n);
+        VkAccelerationStructureBuildSizesInfoKHR sizes{VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_BUILD_SIZES_INFO_KHR};
+        vk.vkGetAccelerationStructureBuildSizesKHR(device, VK_ACCELERATION_STRUCTURE_BUILD_TYPE_HOST_KHR, &info,
+                                                   &maxCount, &sizes);
+        BuildOptions opt;
+        opt.createFlags = VK_ACCELERATION_STRUCTURE_CREATE_MOTION_BIT_NV;
+        opt.motionMaxInstances = uint32_t(n);
+        pb->as = createAccelStruct(VK_ACCELERATION_STRUCTURE_TYPE_TOP_LEVEL_KHR, sizes.accelerationStructureSize, opt);
+        pb->as->sizes = sizes;
+        info.dstAccelerationStructure = pb->as->handle;
+        pb->scratch.assign(sizes.buildScratchSize, 0xAA);
+        info.scratchData.hostAddress = pb->scratch.empty() ? nullptr : pb->scratch.data();
+        auto lookup = [this](uint64_t ref) -> std::shared_ptr<const oracle::Blas> {
+            auto it = blasRegistry.find(ref);
+            return it == blasRegistry.end() ? nullptr : it->second;
+        };
+        scene.instances.clear();
+        for (size_t i = 0; i < n; ++i) {
+            const uint8_t* p = pb->instanceBytes.data() + stride * i;
+            scene.instances.push_back(oracle::decodeMotionInstance(descs[i].type, p + 8, lookup));
+        }
+        if (src) return submitUpdate(*pb, src, dst);
+        submit({pb.get()});
+        return pb->as;
+    }
+
+    // [NV-motion] Rays traced at each time: random and targeted rays of the oracle's scene at that time, through
+    // vkasRayQueryInitializeMotion (every candidate confirmed; closest and, for a third of them, first hit) against
+    // the oracle at that time; at time 0 also checkRays (plain initialize and vkasTraceRays trace at time 0).
+    // Returns the hits.
+    size_t checkMotion(const AccelStruct* tlas, const oracle::MotionScene& scene, size_t raysPerTime) {
+        std::vector<float> times = {0.0f, 1.0f, 0.5f};
+        for (int i = 0; i < 3; ++i) times.push_back(rng.uniformf(0.0f, 1.0f));
+        size_t hits = 0, failures = 0;
+        for (float time : times) {
+            const oracle::Scene at = scene.at(time);
+            auto rays = randomRays(at, raysPerTime / 2);
+            auto targeted = targetedRays(at, raysPerTime - rays.size());
+            rays.insert(rays.end(), targeted.begin(), targeted.end());
+            for (size_t i = 0; i < rays.size(); ++i) {
+                const oracle::Ray& ray = rays[i];
+                const uint32_t flags = i % 3 == 2 ? VKAS_RAY_FLAG_TERMINATE_ON_FIRST_HIT : 0u;
+                const oracle::Result ex = oracle::trace(at, ray, flags, 0xFF);
+                VkasRayQuery q;
+                vkasRayQueryInitializeMotion(&q, tlas->handle, flags, 0xFF, ray.origin.data(), ray.tMin,
+                                             ray.direction.data(), ray.tMax, time);
+                while (vkasRayQueryProceed(&q)) vkasRayQueryConfirmIntersection(&q);
+                const Hit got = readHit(q, true);
+                hits += got.type != VKAS_COMMITTED_INTERSECTION_NONE;
+                const auto res = flags ? matchesAnyHit(ex, ray, got) : matchesClosest(ex, ray, got);
+                if (!res && ++failures <= 10)
+                    ADD_FAILURE() << "time " << time << " ray " << describe(ray) << ": " << res.message() << "\n  seed "
+                                  << seed;
+            }
+            if (time == 0.0f) {
+                AccelStruct view = *tlas;
+                view.scene = std::make_shared<oracle::Scene>(at);
+                hits += checkRays(&view, rays);
+            }
+        }
+        return hits;
     }
     void checkBlas(const AccelStruct* blas, size_t rays = 150) {
         AccelStruct* tlas = buildSingleInstanceTlas(blas);
@@ -387,7 +841,11 @@ TEST_F(update, aabbs) {
 
 // New transforms, masks, custom indices, SBT offsets, flags and referenced bottom levels; inactive instances stay
 // inactive. In place and into a fresh structure.
-TEST_F(update, instance_update) {
+// CTS `instance_update`: top-level updates (transforms, masks, custom indices, SBT offsets, flags, the referenced
+// bottom level, motion instances).
+class instance_update : public update {};
+
+TEST_F(instance_update, transforms_masks_ids_flags_and_references) {
     Mesh sphere = icosphere(2), knot = torusKnot(64, 8);
     auto ga = makeGeometry(sphere, VK_INDEX_TYPE_UINT16, VK_GEOMETRY_OPAQUE_BIT_KHR);
     auto gb = makeGeometry(knot, VK_INDEX_TYPE_UINT32, 0);
@@ -426,7 +884,7 @@ TEST_F(update, instance_update) {
 }
 
 // CTS instance_update.update_in_place then copy: the refitted structure copied (CLONE) traces like the original.
-TEST_F(update, instance_update_then_copy) {
+TEST_F(instance_update, then_copy) {
     auto g = makeGeometry(icosphere(2), VK_INDEX_TYPE_UINT32, VK_GEOMETRY_OPAQUE_BIT_KHR);
     AccelStruct* blas = buildBlas(*g);
     std::vector<Instance> instances(8);
@@ -452,7 +910,7 @@ TEST_F(update, instance_update_then_copy) {
 }
 
 // A refitted bottom level, then the top level updated: the instance boxes follow the new bottom-level bounds.
-TEST_F(update, blas_then_tlas) {
+TEST_F(instance_update, blas_then_tlas) {
     Mesh m = icosphere(2);
     auto g0 = makeGeometry(m, VK_INDEX_TYPE_UINT32, VK_GEOMETRY_OPAQUE_BIT_KHR);
     BuildOptions opt;
@@ -469,6 +927,243 @@ TEST_F(update, blas_then_tlas) {
     AccelStruct* out = updateTlas(tlas, tlas, instances, opt);
     checkRays(out, targetedRays(*out->scene, 200));
     checkRays(out, randomRays(*out->scene, 200));
+}
+
+// ---- [NV-LSS] spheres and linear swept spheres --------------------------------------------------------------------
+
+// Refit of spheres and LSS (LIST and SUCCESSIVE indexing, end caps NONE and CHAINED): moved positions and new radii,
+// zero radii given a radius and positive ones taken away (degenerate both ways), inactive primitives staying
+// inactive; in place and into another structure, then once more from the refitted structure. The ALLOW_UPDATE
+// build stores the degenerate primitives (a build without it does not), and an update with the build's own inputs
+// gives the build's bytes.
+TEST_F(update, spheres_and_lss) {
+    struct Case {
+        bool lss;
+        uint32_t indexing, caps;
+    };
+    const Case cases[] = {{false, 0, 0},
+                          {true, VK_RAY_TRACING_LSS_INDEXING_MODE_LIST_NV, VK_RAY_TRACING_LSS_PRIMITIVE_END_CAPS_MODE_NONE_NV},
+                          {true, VK_RAY_TRACING_LSS_INDEXING_MODE_LIST_NV, VK_RAY_TRACING_LSS_PRIMITIVE_END_CAPS_MODE_CHAINED_NV},
+                          {true, VK_RAY_TRACING_LSS_INDEXING_MODE_SUCCESSIVE_NV, VK_RAY_TRACING_LSS_PRIMITIVE_END_CAPS_MODE_NONE_NV},
+                          {true, VK_RAY_TRACING_LSS_INDEXING_MODE_SUCCESSIVE_NV,
+                           VK_RAY_TRACING_LSS_PRIMITIVE_END_CAPS_MODE_CHAINED_NV}};
+    for (const Case& c : cases)
+        for (int inPlace = 0; inPlace < 2; ++inPlace) {
+            SCOPED_TRACE(testing::Message() << "lss " << c.lss << " indexing " << c.indexing << " caps " << c.caps
+                                            << " inPlace " << inPlace);
+            auto g0 = randomSwept(rng, c.lss, c.indexing, c.caps, 20 + rng.below(60));
+            uint32_t degenerate = 0, hittable = 0;
+            {
+                const auto& sw = oracle::fetchGeometry(g0->geometry, g0->range).swept;
+                for (const auto& sp : sw) degenerate += sp.active && sp.r[0] == 0 && sp.r[1] == 0, hittable += sp.hittable();
+            }
+            BuildOptions opt;
+            opt.flags = kAllowUpdate;
+            opt.usePointers = rng.coin();
+            AccelStruct* blas = buildBlas({g0->geometry}, {g0->range}, opt);
+            // Degenerate primitives are stored (never hit) by an ALLOW_UPDATE build only.
+            EXPECT_EQ(recordCount(blas), hittable + degenerate);
+            EXPECT_EQ(recordCount(buildBlas({g0->geometry}, {g0->range})), hittable);
+            checkSweptBlas(blas, 80);
+            // The build's own inputs: the same bytes (up to the sign of a zero box coordinate).
+            {
+                uint64_t used;
+                std::memcpy(&used, blas->data() + 16, 8);
+                AccelStruct* same = updateBlas(blas, nullptr, {g0->geometry}, {g0->range}, opt);
+                for (uint64_t i = 0; i < used; i += 4) {
+                    if (std::memcmp(blas->data() + i, same->data() + i, 4) == 0) continue;
+                    float a, b;
+                    std::memcpy(&a, blas->data() + i, 4), std::memcpy(&b, same->data() + i, 4);
+                    ASSERT_TRUE(a == 0.0f && b == 0.0f) << "byte " << i << " differs";
+                }
+            }
+            auto g1 = movedSwept(*g0, rng, 0.3f);
+            AccelStruct* out = updateBlas(blas, inPlace ? blas : nullptr, {g1->geometry}, {g1->range}, opt);
+            EXPECT_GT(checkSweptBlas(out), 0u) << "seed " << seed;
+            auto g2 = movedSwept(*g1, rng, 0.3f);
+            AccelStruct* out2 = updateBlas(out, inPlace ? out : nullptr, {g2->geometry}, {g2->range}, opt);
+            EXPECT_GT(checkSweptBlas(out2), 0u) << "seed " << seed;
+            if (HasFailure()) return;
+        }
+}
+
+// A zero-radius sphere and a zero-radius LSS (both radii 0), built with ALLOW_UPDATE: never hit, not even by a ray
+// through the point itself; an update that gives them a radius is valid (no VUID 03664) and makes them hit; an
+// update back to zero makes them miss again. For every LSS indexing and end-caps mode; in place and into another
+// structure.
+TEST_F(update, zero_radius_revival) {
+    struct Case {
+        bool lss;
+        uint32_t indexing, caps;
+    };
+    const Case cases[] = {{false, 0, 0},
+                          {true, VK_RAY_TRACING_LSS_INDEXING_MODE_LIST_NV, VK_RAY_TRACING_LSS_PRIMITIVE_END_CAPS_MODE_NONE_NV},
+                          {true, VK_RAY_TRACING_LSS_INDEXING_MODE_LIST_NV, VK_RAY_TRACING_LSS_PRIMITIVE_END_CAPS_MODE_CHAINED_NV},
+                          {true, VK_RAY_TRACING_LSS_INDEXING_MODE_SUCCESSIVE_NV, VK_RAY_TRACING_LSS_PRIMITIVE_END_CAPS_MODE_NONE_NV},
+                          {true, VK_RAY_TRACING_LSS_INDEXING_MODE_SUCCESSIVE_NV,
+                           VK_RAY_TRACING_LSS_PRIMITIVE_END_CAPS_MODE_CHAINED_NV}};
+    for (const Case& c : cases)
+        for (int inPlace = 0; inPlace < 2; ++inPlace) {
+            SCOPED_TRACE(testing::Message() << "lss " << c.lss << " indexing " << c.indexing << " caps " << c.caps
+                                            << " inPlace " << inPlace);
+            // Primitive 0 is real at x = -2, primitive 1 degenerate at x = 2 (an LSS from (2, -1, 0) to (2, 1, 0)).
+            SweptInput base;
+            base.lss = c.lss;
+            base.indexingMode = c.indexing;
+            base.endCapsMode = c.caps;
+            if (!c.lss) {
+                base.positions = {{-2, 0, 0}, {2, 0, 0}};
+                base.radii = {0.5f, 0.0f};
+            } else {
+                base.positions = {{-2, -1, 0}, {-2, 1, 0}, {2, -1, 0}, {2, 1, 0}};
+                base.radii = {0.5f, 0.5f, 0.0f, 0.0f};
+                if (c.indexing == VK_RAY_TRACING_LSS_INDEXING_MODE_SUCCESSIVE_NV) base.indices = {0, 2};
+            }
+            wireSwept(base, 2, 0);  // not opaque: every candidate goes back to the application
+            BuildOptions opt;
+            opt.flags = kAllowUpdate;
+            AccelStruct* blas = buildBlas({base.geometry}, {base.range}, opt);
+            EXPECT_EQ(recordCount(blas), 2u);
+            oracle::Ray through, beside, onPoint;  // through the segment's middle / the sphere's centre, beside it
+            through.origin = {2, 0, 3}, through.direction = {0, 0, -1}, through.tMax = 10;
+            beside.origin = {2.3f, 0, 3}, beside.direction = {0, 0, -1}, beside.tMax = 10;
+            onPoint.origin = {2, c.lss ? -1.0f : 0.0f, 3}, onPoint.direction = {0, 0, -1}, onPoint.tMax = 10;
+            oracle::Ray real = through;
+            real.origin[0] = -2;
+            {
+                AccelStruct* tlas = buildSingleInstanceTlas(blas);
+                EXPECT_EQ(traceClosest(tlas, through).type, 0u);
+                EXPECT_EQ(traceClosest(tlas, onPoint).type, 0u);
+                const Hit h = traceClosest(tlas, real);
+                EXPECT_EQ(h.type, 1u);
+                EXPECT_EQ(h.primitiveIndex, 0);
+                for (const auto& ray : {through, onPoint}) {
+                    EXPECT_TRUE(query(tlas->handle, ray, 0, 0xFF).candidates.empty()) << "a degenerate candidate";
+                    EXPECT_EQ(traceClosest(tlas, ray, VKAS_RAY_FLAG_OPAQUE).type, 0u);
+                }
+                checkRays(tlas, {through, beside, onPoint, real});
+            }
+            // Revived: radius 0.5 (LSS: both ends). Valid usage, so the fixture sees no validation message.
+            std::vector<float> radii = base.radii;
+            for (size_t v = c.lss ? 2 : 1; v < radii.size(); ++v) radii[v] = 0.5f;
+            auto g1 = withData(base, base.positions, radii);
+            AccelStruct* out = updateBlas(blas, inPlace ? blas : nullptr, {g1->geometry}, {g1->range}, opt);
+            EXPECT_TRUE(takeValidationErrors().empty());
+            {
+                AccelStruct* tlas = buildSingleInstanceTlas(out);
+                const Hit h = traceClosest(tlas, through);
+                EXPECT_EQ(h.type, 1u);
+                EXPECT_EQ(h.primitiveIndex, 1);
+                EXPECT_FLOAT_EQ(h.t, 2.5f);
+                EXPECT_EQ(traceClosest(tlas, beside).primitiveIndex, 1);
+                checkRays(tlas, {through, beside, onPoint, real});
+                checkSweptBlas(out, 60);
+            }
+            // Back to zero (and moved): never hit again.
+            std::vector<Float3> pos = base.positions;
+            for (size_t v = c.lss ? 2 : 1; v < pos.size(); ++v) pos[v][2] = 0.25f;
+            auto g2 = withData(base, pos, base.radii);
+            AccelStruct* out2 = updateBlas(out, inPlace ? out : nullptr, {g2->geometry}, {g2->range}, opt);
+            {
+                AccelStruct* tlas = buildSingleInstanceTlas(out2);
+                EXPECT_EQ(traceClosest(tlas, through).type, 0u);
+                EXPECT_EQ(traceClosest(tlas, onPoint).type, 0u);
+                for (const auto& ray : {through, onPoint})
+                    EXPECT_TRUE(query(tlas->handle, ray, 0, 0xFF).candidates.empty()) << "a degenerate candidate";
+                checkRays(tlas, {through, beside, onPoint, real});
+            }
+            // And revived once more, from the refitted structure.
+            auto g3 = withData(base, pos, radii);
+            AccelStruct* out3 = updateBlas(out2, inPlace ? out2 : nullptr, {g3->geometry}, {g3->range}, opt);
+            {
+                AccelStruct* tlas = buildSingleInstanceTlas(out3);
+                const Hit h = traceClosest(tlas, through);
+                EXPECT_EQ(h.primitiveIndex, 1);
+                EXPECT_FLOAT_EQ(h.t, 2.25f);
+            }
+            if (HasFailure()) return;
+        }
+}
+
+// ---- [NV-motion] motion triangles and motion top levels ---------------------------------------------------------
+
+// A motion bottom level (positions at time 0 and 1) refitted to moved positions at both times, in place and into
+// another structure, under a plain and a motion top level; traced at several ray times against the oracle.
+TEST_F(update, motion_triangles) {
+    for (int round = 0; round < 4; ++round) {
+        const bool inPlace = round % 2 == 1, indexed = round < 2;
+        SCOPED_TRACE(testing::Message() << "inPlace " << inPlace << " indexed " << indexed);
+        Mesh m = triangleSoup(40 + int(rng.below(80)), rng, 0.4f);
+        Mesh s = triangleSoup(10 + int(rng.below(20)), rng, 0.3f);
+        auto a0 = makeMotionInput(m, deform(m, rng, 0.5f).positions, indexed, VK_GEOMETRY_OPAQUE_BIT_KHR);
+        auto b0 = makeMotionInput(s, deform(s, rng, 0.3f).positions, !indexed, 0);
+        AccelStruct* blas = motionBlas({a0.get(), b0.get()});
+        // New positions at both times (the index buffers stay).
+        auto a1 = makeMotionInput(deform(m, rng, 0.3f), deform(m, rng, 0.8f).positions, indexed, VK_GEOMETRY_OPAQUE_BIT_KHR);
+        auto b1 = makeMotionInput(deform(s, rng, 0.3f), deform(s, rng, 0.3f).positions, !indexed, 0);
+        AccelStruct* out = motionBlas({a1.get(), b1.get()}, blas, inPlace ? blas : nullptr);
+        // Under a plain top level (one identity instance; traced at the query's time all the same)...
+        AccelStruct* plain = buildSingleInstanceTlas(out);
+        oracle::MotionScene plainScene;
+        oracle::MotionInstance mi;
+        for (int r = 0; r < 3; ++r)
+            for (int c = 0; c < 4; ++c) mi.transform0[r][c] = mi.transform1[r][c] = r == c ? 1.0 : 0.0;
+        mi.base = plain->scene->instances[0];
+        plainScene.instances.push_back(mi);
+        EXPECT_GT(checkMotion(plain, plainScene, 60), 0u);
+        // ...and under static, matrix and SRT instances of a motion top level.
+        std::vector<MotionDesc> descs = {randomMotionDesc(rng, out, 0), randomMotionDesc(rng, out, 1),
+                                         randomMotionDesc(rng, out, 2)};
+        oracle::MotionScene scene;
+        AccelStruct* tlas = motionTlas(descs, scene);
+        EXPECT_GT(checkMotion(tlas, scene, 80), 0u);
+        // A second refit, from the refitted structure, back to the first inputs.
+        AccelStruct* out2 = motionBlas({a0.get(), b0.get()}, out, inPlace ? out : nullptr);
+        AccelStruct* plain2 = buildSingleInstanceTlas(out2);
+        plainScene.instances[0].base = plain2->scene->instances[0];
+        EXPECT_GT(checkMotion(plain2, plainScene, 60), 0u);
+        if (HasFailure()) return;
+    }
+}
+
+// A motion top level (static, matrix-motion and SRT-motion instances, some inactive) refitted to new transforms,
+// ids, masks and bottom levels (the type of each instance kept), in place and into another structure; then a motion
+// bottom level refitted and the top level updated again so that its instance boxes follow. Traced at several times.
+TEST_F(instance_update, motion_instances) {
+    Mesh m = triangleSoup(30, rng, 0.4f);
+    auto mg = makeMotionInput(m, deform(m, rng, 0.4f).positions, true, VK_GEOMETRY_OPAQUE_BIT_KHR);
+    AccelStruct* motion = motionBlas({mg.get()});
+    auto ig = makeGeometry(icosphere(1), VK_INDEX_TYPE_UINT32, VK_GEOMETRY_OPAQUE_BIT_KHR);
+    AccelStruct* still = buildBlas(*ig);
+    AccelStruct* blases[2] = {motion, still};
+    for (int round = 0; round < 4; ++round) {
+        const bool inPlace = round % 2 == 1;
+        SCOPED_TRACE(testing::Message() << "round " << round);
+        std::vector<MotionDesc> descs;
+        const int n = 4 + int(rng.below(10));
+        for (int i = 0; i < n; ++i)
+            descs.push_back(randomMotionDesc(rng, rng.coin(0.15) ? nullptr : blases[rng.below(2)], rng.below(3)));
+        oracle::MotionScene scene;
+        AccelStruct* tlas = motionTlas(descs, scene);
+        EXPECT_GT(checkMotion(tlas, scene, 60), 0u);
+        for (auto& d : descs)  // inactive instances stay inactive, active ones stay active
+            if (d.blas) d = randomMotionDesc(rng, blases[rng.below(2)], d.type);
+        AccelStruct* out = motionTlas(descs, scene, tlas, inPlace ? tlas : nullptr);
+        EXPECT_GT(checkMotion(out, scene, 100), 0u);
+        if (HasFailure()) return;
+    }
+    // The motion bottom level refitted (larger at both times), then the top level updated in place.
+    std::vector<MotionDesc> descs;
+    for (int i = 0; i < 6; ++i) descs.push_back(randomMotionDesc(rng, motion, uint32_t(i % 3)));
+    oracle::MotionScene scene;
+    AccelStruct* tlas = motionTlas(descs, scene);
+    Mesh big = m;
+    for (auto& p : big.positions)
+        for (float& c : p) c *= 2.0f;
+    auto mg1 = makeMotionInput(big, deform(big, rng, 0.6f).positions, true, VK_GEOMETRY_OPAQUE_BIT_KHR);
+    motionBlas({mg1.get()}, motion, motion);
+    AccelStruct* out = motionTlas(descs, scene, tlas, tlas);
+    EXPECT_GT(checkMotion(out, scene, 150), 0u);
 }
 
 // ---- refit cost ---------------------------------------------------------------------------------------------------
@@ -740,6 +1435,55 @@ TEST_F(update_validation, must_match_last_build) {
     }
     // Still updatable after all that: nothing was written.
     checkBlas(f.blas, 50);
+}
+
+// [NV-LSS] 03663 / 03664 for spheres and LSS: a zero radius is degenerate, not inactive, so giving it a radius is
+// valid; making an inactive (NaN) primitive active, or an active one (zero radius included) inactive, is not.
+TEST_F(update_validation, swept_activity) {
+    for (bool lss : {false, true}) {
+        SCOPED_TRACE(lss ? "lss" : "spheres");
+        SweptInput base;
+        base.lss = lss;
+        const size_t per = lss ? 2 : 1;
+        for (int i = 0; i < 4; ++i)
+            for (size_t e = 0; e < per; ++e) base.positions.push_back({float(i), float(e), 0}), base.radii.push_back(0.25f);
+        for (size_t e = 0; e < per; ++e) base.radii[0 * per + e] = kNaN;  // primitive 0 inactive
+        for (size_t e = 0; e < per; ++e) base.radii[1 * per + e] = 0.0f;  // primitive 1 degenerate
+        wireSwept(base, 4, VK_GEOMETRY_OPAQUE_BIT_KHR);
+        BuildOptions opt;
+        opt.flags = kAllowUpdate;
+        AccelStruct* blas = buildBlas({base.geometry}, {base.range}, opt);
+        auto tryRadii = [&](std::vector<float> radii, const char* vuid) {
+            auto d = withData(base, base.positions, std::move(radii));
+            std::vector<VkAccelerationStructureGeometryKHR> gg{d->geometry};
+            EXPECT_ONLY(tryUpdate(blas->handle, blas, blasInfo(gg, opt.flags), {d->range}), vuid);
+        };
+        {
+            auto r = base.radii;
+            for (size_t e = 0; e < per; ++e) r[0 * per + e] = 0.5f;
+            tryRadii(r, "VUID-vkBuildAccelerationStructuresKHR-pInfos-03664");
+        }
+        {
+            auto r = base.radii;
+            r[1 * per] = kNaN;
+            tryRadii(r, "VUID-vkBuildAccelerationStructuresKHR-pInfos-03663");
+        }
+        {
+            auto r = base.radii;
+            r[2 * per] = kNaN;
+            tryRadii(r, "VUID-vkBuildAccelerationStructuresKHR-pInfos-03663");
+        }
+        // The degenerate primitive given a radius: valid, and hit.
+        auto r = base.radii;
+        for (size_t e = 0; e < per; ++e) r[1 * per + e] = 0.25f;
+        auto d = withData(base, base.positions, r);
+        AccelStruct* out = updateBlas(blas, blas, {d->geometry}, {d->range}, opt);
+        EXPECT_TRUE(takeValidationErrors().empty());
+        oracle::Ray ray;
+        ray.origin = {1, lss ? 0.5f : 0.0f, 2}, ray.direction = {0, 0, -1}, ray.tMax = 10;
+        const Hit h = traceClosest(buildSingleInstanceTlas(out), ray);
+        EXPECT_EQ(h.primitiveIndex, 1);
+    }
 }
 
 TEST_F(update_validation, instance_activity) {

@@ -116,8 +116,11 @@ struct AabbRecord {
 // Same size as a triangle record, so the build-size formula holds for both kinds of bottom-level structure.
 static_assert(sizeof(AabbRecord) == sizeof(TriangleRecord));
 
-// [NV-LSS] Sphere and linear-swept-sphere record flags: bits 0 and 2 as for triangles, plus the end caps of an LSS.
+// [NV-LSS] Sphere and linear-swept-sphere record flags: bits 0-2 as for triangles, plus the end caps of an LSS.
 constexpr uint32_t kSweptOpaque = kTriangleOpaque;
+// Zero radius (LSS: both radii zero), kept only by ALLOW_UPDATE builds so that an update can give it a radius;
+// also set by an invalid update. Never hit; re-decided by every refit.
+constexpr uint32_t kSweptDegenerate = kTriangleDegenerate;
 constexpr uint32_t kSweptNoDuplicateAnyHit = kTriangleNoDuplicateAnyHit;
 constexpr uint32_t kLssCap0 = 0x10;  // the sphere at the first endpoint (u = 0) is a surface of the primitive
 constexpr uint32_t kLssCap1 = 0x20;  // the sphere at the second endpoint (u = 1)

@@ -199,12 +199,17 @@ struct SphereRefitter {
         const SweptSpheresSource* s = inputs.at(rec.geometryIndex);
         if (s && rec.primitiveIndex < s->primitiveCount()) {
             const bool active = s->fetchVertex(s->vertexNumber(rec.primitiveIndex, 0), rec.center, rec.radius);
+            // Degenerate is re-decided: a sphere that has a radius again is hit again, one that loses it is not
+            // (its centre still counts in the box, as in an ALLOW_UPDATE build).
+            rec.flags &= ~kSweptDegenerate;
             if (active && rec.radius >= 0.0f) {
+                if (rec.radius == 0.0f) rec.flags |= kSweptDegenerate;
                 double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
                 extendBall(lo, hi, rec.center, rec.radius);
                 box.extend(ballsBox(lo, hi));
             } else {
                 rec.radius = -1.0f;  // invalid update: no ball, never hit
+                rec.flags |= kSweptDegenerate;
             }
         }
         std::memcpy(out, &rec, sizeof rec);
@@ -224,13 +229,17 @@ struct LssRefitter {
             // must not change.
             const bool a = s->fetchVertex(s->vertexNumber(rec.primitiveIndex, 0), rec.p0, rec.r0);
             const bool b = s->fetchVertex(s->vertexNumber(rec.primitiveIndex, 1), rec.p1, rec.r1);
+            // Degenerate (both radii 0) is re-decided as for spheres.
+            rec.flags &= ~kSweptDegenerate;
             if (a && b && rec.r0 >= 0.0f && rec.r1 >= 0.0f) {
+                if (rec.r0 == 0.0f && rec.r1 == 0.0f) rec.flags |= kSweptDegenerate;
                 double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
                 extendBall(lo, hi, rec.p0, rec.r0);
                 extendBall(lo, hi, rec.p1, rec.r1);
                 box.extend(ballsBox(lo, hi));
             } else {
                 rec.r0 = rec.r1 = std::numeric_limits<float>::quiet_NaN();  // invalid update: never hit
+                rec.flags |= kSweptDegenerate;
             }
         }
         std::memcpy(out, &rec, sizeof rec);
@@ -378,7 +387,7 @@ public:
     }
 
     // active: not inactive by the spec's rules (NaN, reference 0). storable: what a build would store (active and
-    // valid; degenerate triangles count, as ALLOW_UPDATE builds keep them).
+    // valid; degenerate triangles, spheres and LSS count, as ALLOW_UPDATE builds keep them).
     void probe(uint32_t g, uint32_t i, bool& active, bool& storable) {
         active = storable = false;
         if (top_) {
@@ -420,7 +429,7 @@ public:
                 if (!s) return;
                 float c[3], r;
                 active = s->fetchVertex(s->vertexNumber(i, 0), c, r);
-                storable = active && r > 0.0f;
+                storable = active && r >= 0.0f;  // zero radius counts: ALLOW_UPDATE builds keep it
                 return;
             }
             case VK_GEOMETRY_TYPE_LINEAR_SWEPT_SPHERES_NV: {
@@ -430,7 +439,7 @@ public:
                 const bool a = s->fetchVertex(s->vertexNumber(i, 0), p0, r0);
                 const bool b = s->fetchVertex(s->vertexNumber(i, 1), p1, r1);
                 active = a && b;
-                storable = active && r0 >= 0.0f && r1 >= 0.0f && !(r0 == 0.0f && r1 == 0.0f);
+                storable = active && r0 >= 0.0f && r1 >= 0.0f;  // both radii 0 counts, as for spheres
                 return;
             }
             default: return;

@@ -157,6 +157,7 @@ uint32_t SweptSpheresSource::endCaps(uint32_t i) const {
 
 uint32_t gatherSpheres(const BuildJob& job, PrimRef* refs, SphereRecord* temp) {
     const auto& info = *job.info;
+    const bool keepDegenerate = (info.flags & VK_BUILD_ACCELERATION_STRUCTURE_ALLOW_UPDATE_BIT_KHR) != 0;
     uint32_t n = 0;
     for (uint32_t g = 0; g < info.geometryCount; ++g) {
         const auto& geom = buildGeometry(info, g);
@@ -168,10 +169,14 @@ uint32_t gatherSpheres(const BuildJob& job, PrimRef* refs, SphereRecord* temp) {
             SphereRecord rec;
             std::memset(&rec, 0, sizeof rec);
             if (!source.fetchVertex(source.vertexNumber(i, 0), rec.center, rec.radius)) continue;  // inactive
-            if (!(rec.radius > 0.0f)) continue;  // negative (invalid) or zero (degenerate): never hit
+            if (!(rec.radius >= 0.0f)) continue;  // negative radius: invalid input, never hit
             rec.geometryIndex = g;
             rec.primitiveIndex = i;
             rec.flags = flags;
+            if (rec.radius == 0.0f) {  // degenerate: never hit; kept for an update that gives it a radius
+                if (!keepDegenerate) continue;
+                rec.flags |= kSweptDegenerate;
+            }
             double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
             extendBall(lo, hi, rec.center, rec.radius);
             temp[n] = rec;
@@ -184,6 +189,7 @@ uint32_t gatherSpheres(const BuildJob& job, PrimRef* refs, SphereRecord* temp) {
 
 uint32_t gatherLss(const BuildJob& job, PrimRef* refs, LssRecord* temp) {
     const auto& info = *job.info;
+    const bool keepDegenerate = (info.flags & VK_BUILD_ACCELERATION_STRUCTURE_ALLOW_UPDATE_BIT_KHR) != 0;
     uint32_t n = 0;
     for (uint32_t g = 0; g < info.geometryCount; ++g) {
         const auto& geom = buildGeometry(info, g);
@@ -198,10 +204,13 @@ uint32_t gatherLss(const BuildJob& job, PrimRef* refs, LssRecord* temp) {
             const bool b = source.fetchVertex(source.vertexNumber(i, 1), rec.p1, rec.r1);
             if (!a || !b) continue;                                  // inactive
             if (!(rec.r0 >= 0.0f && rec.r1 >= 0.0f)) continue;       // invalid input: never hit
-            if (rec.r0 == 0.0f && rec.r1 == 0.0f) continue;          // degenerate: never hit
             rec.geometryIndex = g;
             rec.primitiveIndex = i;
             rec.flags = flags | source.endCaps(i);
+            if (rec.r0 == 0.0f && rec.r1 == 0.0f) {  // degenerate: never hit; kept for an update
+                if (!keepDegenerate) continue;
+                rec.flags |= kSweptDegenerate;
+            }
             double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
             extendBall(lo, hi, rec.p0, rec.r0);
             extendBall(lo, hi, rec.p1, rec.r1);

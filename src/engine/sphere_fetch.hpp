@@ -71,8 +71,10 @@ private:
 };
 
 // The gather steps of buildBottomLevel: fetch the active primitives of every sphere (LSS) geometry into temp[]
-// and refs[], returning how many. Inactive primitives (NaN), negative radii (invalid input, VUIDs 10426/10436)
-// and zero radii (degenerate) are left out; they still count in primitive indices.
+// and refs[], returning how many. Inactive primitives (NaN) and negative radii (invalid input, VUIDs
+// 10426/10436) are left out; they still count in primitive indices. Degenerate ones (radius 0; LSS: both radii 0)
+// are left out too, except with ALLOW_UPDATE, where they are stored with kSweptDegenerate (never hit; the box is
+// the centre / the endpoints) because an update may give them a radius (spec digest 5).
 uint32_t gatherSpheres(const BuildJob& job, PrimRef* refs, format::SphereRecord* temp);
 uint32_t gatherLss(const BuildJob& job, PrimRef* refs, format::LssRecord* temp);
 

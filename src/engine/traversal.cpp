@@ -295,6 +295,8 @@ bool visitAabbLeaf(RayQueryState& q) {
 // are for triangles); SkipTriangles (SkipBuiltinPrimitivesNV) skipped the whole instance in enterInstance.
 TriangleOutcome testSwept(RayQueryState& q, const SphereRecord* sphere, const LssRecord* lss) {
     float t, u = 0.0f;
+    // Degenerate (zero radii, kept for updates) or made invalid by an update: no candidate at all.
+    if (((sphere ? sphere->flags : lss->flags) & kSweptDegenerate) != 0) return TriangleOutcome::None;
     uint32_t recordFlags;
     if (sphere) {
         if (!intersectSphere(q.objectRay.org, q.objectRay.dir, sphere->center, sphere->radius, q.tMin, q.tMax, t))
