@@ -99,15 +99,6 @@ void writeGeometryDescs(std::byte* dst, const BuildJob& job) {
     }
 }
 
-// Rounds a double bound outwards to float so the float box contains the double one.
-float roundDown(double v) {
-    float f = float(v);
-    return double(f) > v ? std::nextafter(f, -INFINITY) : f;
-}
-float roundUp(double v) {
-    float f = float(v);
-    return double(f) < v ? std::nextafter(f, INFINITY) : f;
-}
 
 Aabb instanceWorldBounds(const RawInstance& inst, const std::byte* blas) {
     const Header* h = header(blas);

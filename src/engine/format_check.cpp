@@ -1,6 +1,8 @@
 #include "engine/format_check.hpp"
 
 #include <cstring>
+
+#include "engine/byte_io.hpp"
 #include <vector>
 
 #include <vulkan/vulkan_core.h>
@@ -10,17 +12,6 @@
 namespace vkas::format {
 
 namespace {
-
-uint64_t load64(const std::byte* p) {
-    uint64_t v;
-    std::memcpy(&v, p, 8);
-    return v;
-}
-uint32_t load32(const std::byte* p) {
-    uint32_t v;
-    std::memcpy(&v, p, 4);
-    return v;
-}
 
 CheckResult corrupt(const char* reason) { return {CheckStatus::Corrupt, reason}; }
 

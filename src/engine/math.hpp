@@ -108,4 +108,14 @@ inline void storeUnaligned(void* p, const T& v) {
     std::memcpy(p, &v, sizeof v);
 }
 
+// The float nearest below / above a double: bounds computed in double, rounded outwards so the float box holds them.
+inline float roundDown(double v) {
+    float f = float(v);
+    return double(f) > v ? std::nextafter(f, -INFINITY) : f;
+}
+inline float roundUp(double v) {
+    float f = float(v);
+    return double(f) < v ? std::nextafter(f, INFINITY) : f;
+}
+
 }  // namespace vkas

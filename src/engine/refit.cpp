@@ -19,22 +19,7 @@ namespace {
 
 constexpr float kInf = std::numeric_limits<float>::infinity();
 
-float roundDown(double v) {
-    float f = float(v);
-    return double(f) > v ? std::nextafter(f, -INFINITY) : f;
-}
-float roundUp(double v) {
-    float f = float(v);
-    return double(f) < v ? std::nextafter(f, INFINITY) : f;
-}
 
-// The box of balls (c, r), computed in double and rounded outwards, as the sphere and LSS gathers compute it.
-void extendBall(double lo[3], double hi[3], const float c[3], float r) {
-    for (int k = 0; k < 3; ++k) {
-        lo[k] = std::min(lo[k], double(c[k]) - double(r));
-        hi[k] = std::max(hi[k], double(c[k]) + double(r));
-    }
-}
 Aabb ballsBox(const double lo[3], const double hi[3]) {
     Aabb b;
     b.lower = {roundDown(lo[0]), roundDown(lo[1]), roundDown(lo[2])};

@@ -2,21 +2,11 @@
 
 #include <cstring>
 
+#include "engine/byte_io.hpp"
+
 namespace vkas::serial {
 
 namespace {
-
-uint64_t load64(const std::byte* p) {
-    uint64_t v;
-    std::memcpy(&v, p, 8);
-    return v;
-}
-uint32_t load32(const std::byte* p) {
-    uint32_t v;
-    std::memcpy(&v, p, 4);
-    return v;
-}
-void store64(std::byte* p, uint64_t v) { std::memcpy(p, &v, 8); }
 
 format::Header loadHeader(const std::byte* block) {
     format::Header h;

@@ -18,22 +18,7 @@ T load(const std::byte* p) {
     return v;
 }
 
-float roundDown(double v) {
-    float f = float(v);
-    return double(f) > v ? std::nextafter(f, -INFINITY) : f;
-}
-float roundUp(double v) {
-    float f = float(v);
-    return double(f) < v ? std::nextafter(f, INFINITY) : f;
-}
 
-// Bounds of a ball, rounded outwards so the float box contains it.
-void extendBall(double lo[3], double hi[3], const float c[3], float r) {
-    for (int k = 0; k < 3; ++k) {
-        lo[k] = std::min(lo[k], double(c[k]) - double(r));
-        hi[k] = std::max(hi[k], double(c[k]) + double(r));
-    }
-}
 
 void setRef(PrimRef& ref, uint32_t index, const double lo[3], const double hi[3]) {
     for (int k = 0; k < 3; ++k) ref.lower[k] = roundDown(lo[k]), ref.upper[k] = roundUp(hi[k]);
@@ -49,6 +34,13 @@ uint32_t recordFlags(VkGeometryFlagsKHR flags) {
 }
 
 }  // namespace
+
+void extendBall(double lo[3], double hi[3], const float c[3], float r) {
+    for (int k = 0; k < 3; ++k) {
+        lo[k] = std::min(lo[k], double(c[k]) - double(r));
+        hi[k] = std::max(hi[k], double(c[k]) + double(r));
+    }
+}
 
 const void* findInChain(const void* pNext, VkStructureType sType) {
     for (auto* s = static_cast<const VkBaseInStructure*>(pNext); s; s = s->pNext)

@@ -78,4 +78,7 @@ private:
 uint32_t gatherSpheres(const BuildJob& job, PrimRef* refs, format::SphereRecord* temp);
 uint32_t gatherLss(const BuildJob& job, PrimRef* refs, format::LssRecord* temp);
 
+// Grows [lo, hi] (double) by the ball (c, r): the bounds of spheres and LSS, before rounding outwards to float.
+void extendBall(double lo[3], double hi[3], const float c[3], float r);
+
 }  // namespace vkas
