@@ -4,7 +4,6 @@
 // brute-force oracle on the new inputs. Also: a triangle collapsed to a point in the build is hit again once the
 // update gives it area; an update with the build's inputs traces identically; and every update VUID is reported
 // alone, with the destination untouched.
-#include <chrono>
 #include <cmath>
 #include <cstring>
 #include <iostream>
@@ -19,9 +18,6 @@ namespace {
 constexpr VkBuildAccelerationStructureFlagsKHR kAllowUpdate = VK_BUILD_ACCELERATION_STRUCTURE_ALLOW_UPDATE_BIT_KHR;
 const float kNaN = std::numeric_limits<float>::quiet_NaN();
 
-double seconds(std::chrono::steady_clock::time_point t0) {
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
 
 // Vertex data of a mesh in one of several vertex formats (non-indexed or indexed like makeGeometry).
 struct FormattedGeometry {
@@ -1169,29 +1165,24 @@ TEST_F(instance_update, motion_instances) {
 // ---- refit cost ---------------------------------------------------------------------------------------------------
 
 // 2^20 triangles: a refit costs a small fraction of a build (printed; docs/PERFORMANCE.md "Refit").
-TEST_F(update, refit_cost_1m_triangles) {
-    const int n = 512;  // 512 x 1024 quads = 2^20 triangles
+// A large refit (2^18 triangles, every vertex moved) traces right. How long it takes against a build is measured by
+// bench/refit.cpp, not here (tests are not timed).
+TEST_F(update, large_refit) {
+    const int n = 256;  // 256 x 512 quads = 2^18 triangles
     Mesh m = grid(n, 2 * n);
     for (auto& p : m.positions) p[2] = 0.1f * std::sin(p[0] * 0.3f) * std::cos(p[1] * 0.2f);
     auto g0 = makeGeometry(m, VK_INDEX_TYPE_UINT32, VK_GEOMETRY_OPAQUE_BIT_KHR);
-    ASSERT_EQ(g0->range.primitiveCount, 1u << 20);
+    ASSERT_EQ(g0->range.primitiveCount, 1u << 18);
     BuildOptions opt;
     opt.flags = kAllowUpdate;
     auto pb = prepareBlas({g0.get()}, opt);
-    auto t0 = std::chrono::steady_clock::now();
     submit({pb.get()});
-    const double build = seconds(t0);
     AccelStruct* blas = pb->as;
     Mesh moved = m;
     for (auto& p : moved.positions) p[2] += 0.05f * std::sin(p[0] * 0.7f + p[1]);
     auto g1 = makeGeometry(moved, VK_INDEX_TYPE_UINT32, VK_GEOMETRY_OPAQUE_BIT_KHR);
     auto pu = prepareBlas({g1.get()}, opt);
-    t0 = std::chrono::steady_clock::now();
     submitUpdate(*pu, blas, blas);
-    const double refit = seconds(t0);
-    std::cout << "  2^20 triangles: build " << build << " s, refit in place " << refit << " s (" << refit / build
-              << " of a build), validation included" << std::endl;
-    EXPECT_LT(refit, build * 0.5);
     AccelStruct* tlas = buildSingleInstanceTlas(blas);
     for (int k = 0; k < 200; ++k) {
         oracle::Ray r;
@@ -1201,6 +1192,7 @@ TEST_F(update, refit_cost_1m_triangles) {
         const Hit h = traceClosest(tlas, r);
         ASSERT_EQ(h.type, 1u);
     }
+    checkRays(tlas, randomRays(*tlas->scene, 100));
 }
 
 // ---- valid usage ----------------------------------------------------------------------------------------------------
