@@ -234,7 +234,8 @@ protected:
         std::vector<VkAccelerationStructureBuildRangeInfoKHR> r;
         for (const auto* m : geoms) g.push_back(m->geometry), r.push_back(m->range);
         BuildOptions opt;
-        opt.flags = extraFlags | (motion ? kMotionBuild : 0);
+        // ALLOW_DATA_ACCESS: the checks fetch hit positions (VUID-RuntimeSpirv-flags-08761).
+        opt.flags = extraFlags | VK_BUILD_ACCELERATION_STRUCTURE_ALLOW_DATA_ACCESS_KHR | (motion ? kMotionBuild : 0);
         opt.createFlags = motion ? kMotionCreate : 0;
         opt.usePointers = rng.coin();
         auto pb = prepareBlas(g, r, opt);
@@ -435,7 +436,9 @@ protected:
     std::vector<AccelStruct*> someBlases() {
         std::vector<AccelStruct*> out;
         keep.push_back(makeGeometry(icosphere(1), VK_INDEX_TYPE_UINT32));
-        out.push_back(buildBlas(*keep.back()));  // a non-motion structure under motion instances
+        BuildOptions dataAccess;  // the checks fetch hit positions
+        dataAccess.flags = VK_BUILD_ACCELERATION_STRUCTURE_ALLOW_DATA_ACCESS_KHR;
+        out.push_back(buildBlas(*keep.back(), dataAccess));  // a non-motion structure under motion instances
         for (int k = 0; k < 2; ++k) {
             Mesh m = triangleSoup(int(rng.range(10, 60)), rng, 0.4f);
             GeometryLayout L;

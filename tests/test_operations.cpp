@@ -895,9 +895,9 @@ TEST_F(operations_validation, copy_rules) {
     AccelStruct* small = createAccelStruct(VK_ACCELERATION_STRUCTURE_TYPE_BOTTOM_LEVEL_KHR, 256, {});
     AccelStruct* big = createAccelStruct(VK_ACCELERATION_STRUCTURE_TYPE_BOTTOM_LEVEL_KHR, plain->size, {});
     copy(plain, big, VK_COPY_ACCELERATION_STRUCTURE_MODE_COMPACT_KHR, "VUID-VkCopyAccelerationStructureInfoKHR-src-03411");
-    copy(plain, small, VK_COPY_ACCELERATION_STRUCTURE_MODE_CLONE_KHR, "VUID-VkCopyAccelerationStructureInfoKHR-dst-12418");
+    copy(plain, small, VK_COPY_ACCELERATION_STRUCTURE_MODE_CLONE_KHR, "VUID-VkCopyAccelerationStructureInfoKHR-mode-12418");
     copy(compactable, small, VK_COPY_ACCELERATION_STRUCTURE_MODE_COMPACT_KHR,
-         "VUID-VkCopyAccelerationStructureInfoKHR-dst-12419");
+         "VUID-VkCopyAccelerationStructureInfoKHR-mode-12419");
     copy(plain, big, VK_COPY_ACCELERATION_STRUCTURE_MODE_SERIALIZE_KHR, "VUID-VkCopyAccelerationStructureInfoKHR-mode-03410");
     copy(small, big, VK_COPY_ACCELERATION_STRUCTURE_MODE_CLONE_KHR, "VUID-vkCopyAccelerationStructureKHR-src-11586");
     copy(plain, plain, VK_COPY_ACCELERATION_STRUCTURE_MODE_CLONE_KHR, "VUID-VkCopyAccelerationStructureInfoKHR-dst-07791");
@@ -990,7 +990,9 @@ class operations_corrupt : public OperationsTest {
             EXPECT_EQ(vk.vkCreateBuffer(device, &bi, nullptr, &buffer), VK_SUCCESS);
             VkMemoryRequirements req;
             vk.vkGetBufferMemoryRequirements(device, buffer, &req);
-            VkMemoryAllocateInfo ai{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
+            VkMemoryAllocateFlagsInfo flagsInfo{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_FLAGS_INFO};
+            flagsInfo.flags = VK_MEMORY_ALLOCATE_DEVICE_ADDRESS_BIT;
+            VkMemoryAllocateInfo ai{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO, &flagsInfo};
             ai.allocationSize = req.size;
             VkDeviceMemory memory;
             EXPECT_EQ(vk.vkAllocateMemory(device, &ai, nullptr, &memory), VK_SUCCESS);

@@ -1151,7 +1151,9 @@ TEST_F(procedural_geometry, inverted_boxes_without_validation) {
         EXPECT_EQ(vkCreateBuffer(dev, &bci, nullptr, &buf), VK_SUCCESS);
         VkMemoryRequirements req;
         vkGetBufferMemoryRequirements(dev, buf, &req);
-        VkMemoryAllocateInfo mai{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
+        VkMemoryAllocateFlagsInfo flagsInfo{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_FLAGS_INFO};
+        flagsInfo.flags = VK_MEMORY_ALLOCATE_DEVICE_ADDRESS_BIT;
+        VkMemoryAllocateInfo mai{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO, &flagsInfo};
         mai.allocationSize = req.size;
         VkDeviceMemory mem;
         EXPECT_EQ(vkAllocateMemory(dev, &mai, nullptr, &mem), VK_SUCCESS);

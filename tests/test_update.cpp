@@ -1391,7 +1391,7 @@ TEST_F(update_validation, must_match_last_build) {
     {
         auto r = range;
         r.primitiveCount -= 1;
-        expectOnly({base}, {r}, f.opt.flags, "VUID-vkBuildAccelerationStructuresKHR-pInfos-03769");
+        expectOnly({base}, {r}, f.opt.flags, "VUID-vkBuildAccelerationStructuresKHR-primitiveCount-03769");
     }
     // 03663: an active triangle made inactive.
     {
@@ -1503,7 +1503,7 @@ TEST_F(update_validation, instance_activity) {
         auto changed = instances;
         changed.pop_back();
         auto pb = prepareTlas(changed, opt);
-        EXPECT_ONLY(tryUpdate(tlas->handle, tlas, pb->info, pb->ranges), "VUID-vkBuildAccelerationStructuresKHR-pInfos-03769");
+        EXPECT_ONLY(tryUpdate(tlas->handle, tlas, pb->info, pb->ranges), "VUID-vkBuildAccelerationStructuresKHR-primitiveCount-03769");
     }
     checkRays(tlas, randomRays(*tlas->scene, 50));
 }
@@ -1523,5 +1523,5 @@ TEST_F(update_validation, between_infos) {
     EXPECT_EQ(vk.vkBuildAccelerationStructuresKHR(device, VK_NULL_HANDLE, 2, infos, r), VK_ERROR_VALIDATION_FAILED_EXT);
     const auto errors = takeValidationErrors();
     ASSERT_EQ(errors.size(), 1u) << (errors.empty() ? "" : errors[0]);
-    EXPECT_NE(errors[0].find("VUID-vkBuildAccelerationStructuresKHR-dstAccelerationStructure-03403"), std::string::npos);
+    EXPECT_NE(errors[0].find("VUID-vkBuildAccelerationStructuresKHR-pInfos-03403"), std::string::npos);
 }

@@ -5,6 +5,7 @@
 #include <string>
 
 #include "api/device.hpp"
+#include "api/guard.hpp"
 #include "api/validation.hpp"
 #include "engine/traversal.hpp"
 
@@ -67,15 +68,30 @@ void runQuery(vkas::RayQueryState& q, uint32_t rayIndex, PFN_vkasIntersectAabb i
     }
 }
 
+// The parameter rules of vkas's own batch calls, named like Vulkan's implicit VUIDs.
+struct TraceVuids {
+    const char* command;
+    const char* device;    // device is a live VkDevice
+    const char* topLevel;  // topLevel is VK_NULL_HANDLE or a live VkAccelerationStructureKHR
+    const char* mode;      // mode is a VkasTraceMode
+    const char* rays;      // pRays and pHits are not NULL when rayCount is not 0
+};
+constexpr TraceVuids kTraceRaysVuids{"vkasTraceRays", "VUID-vkasTraceRays-device-parameter",
+                                     "VUID-vkasTraceRays-topLevel-parameter", "VUID-vkasTraceRays-mode-parameter",
+                                     "VUID-vkasTraceRays-pRays-parameter"};
+constexpr TraceVuids kTraceRaysProceduralVuids{
+    "vkasTraceRaysProcedural", "VUID-vkasTraceRaysProcedural-device-parameter",
+    "VUID-vkasTraceRaysProcedural-topLevel-parameter", "VUID-vkasTraceRaysProcedural-mode-parameter",
+    "VUID-vkasTraceRaysProcedural-pRays-parameter"};
+
 VkResult traceBatch(VkDevice device, VkAccelerationStructureKHR topLevel, VkasTraceMode mode, uint32_t rayFlags,
                     uint32_t cullMask, uint32_t rayCount, const VkasRay* pRays, VkasHit* pHits,
-                    PFN_vkasIntersectAabb intersect, void* userData, const char* command) {
+                    PFN_vkasIntersectAabb intersect, void* userData, const TraceVuids& vuids) {
     vkas::Device* dev = vkas::Device::fromHandle(device);
-    vkas::Validator v(dev, command);
+    vkas::Validator v(dev, vuids.command);
     const vkas::AccelerationStructure* tlas = nullptr;
-    const std::string vuid = std::string("VUID-") + command;
     if (!dev) {
-        v.fail((vuid + "-device-parameter").c_str(), "device is not a valid VkDevice.");
+        v.fail(vuids.device, "device is not a valid VkDevice.");
         return VK_ERROR_VALIDATION_FAILED_EXT;
     }
     if (topLevel != VK_NULL_HANDLE) {
@@ -84,11 +100,11 @@ VkResult traceBatch(VkDevice device, VkAccelerationStructureKHR topLevel, VkasTr
                    : vkas::fromHandle<vkas::AccelerationStructure>(topLevel);
     }
     if (v.enabled()) {
-        v.check(topLevel == VK_NULL_HANDLE || tlas != nullptr, (vuid + "-topLevel-parameter").c_str(),
+        v.check(topLevel == VK_NULL_HANDLE || tlas != nullptr, vuids.topLevel,
                 "topLevel is not a live VkAccelerationStructureKHR.");
         v.check(mode == VKAS_TRACE_MODE_CLOSEST_HIT || mode == VKAS_TRACE_MODE_ANY_HIT,
-                (vuid + "-mode-parameter").c_str(), "mode %d is not a VkasTraceMode.", int(mode));
-        v.check(rayCount == 0 || (pRays && pHits), (vuid + "-pRays-parameter").c_str(),
+                vuids.mode, "mode %d is not a VkasTraceMode.", int(mode));
+        v.check(rayCount == 0 || (pRays && pHits), vuids.rays,
                 "pRays or pHits is NULL with rayCount %u.", rayCount);
         if (!v.failed()) {
             static const float origin[3] = {0, 0, 0}, direction[3] = {0, 0, 1};
@@ -97,7 +113,8 @@ VkResult traceBatch(VkDevice device, VkAccelerationStructureKHR topLevel, VkasTr
                 char where[48];
                 std::snprintf(where, sizeof where, "pRays[%u]: ", i);
                 const VkasRay& r = pRays[i];
-                vkas::validateRay(v, nullptr, rayFlags, r.origin, r.tMin, r.direction, r.tMax, where);
+                vkas::validateRay(v, nullptr, 0 /* the flags are checked once, above */, r.origin, r.tMin,
+                                  r.direction, r.tMax, where);
             }
         }
         if (v.failed()) return VK_ERROR_VALIDATION_FAILED_EXT;
@@ -127,14 +144,18 @@ VkResult traceBatch(VkDevice device, VkAccelerationStructureKHR topLevel, VkasTr
 extern "C" VKAS_API VkResult vkasTraceRays(VkDevice device, VkAccelerationStructureKHR topLevel, VkasTraceMode mode,
                                            uint32_t rayFlags, uint32_t cullMask, uint32_t rayCount,
                                            const VkasRay* pRays, VkasHit* pHits) {
-    return traceBatch(device, topLevel, mode, rayFlags, cullMask, rayCount, pRays, pHits, nullptr, nullptr,
-                      "vkasTraceRays");
+    return vkas::guarded([&] {
+        return traceBatch(device, topLevel, mode, rayFlags, cullMask, rayCount, pRays, pHits, nullptr, nullptr,
+                          kTraceRaysVuids);
+    });
 }
 
 extern "C" VKAS_API VkResult vkasTraceRaysProcedural(VkDevice device, VkAccelerationStructureKHR topLevel,
                                                      VkasTraceMode mode, uint32_t rayFlags, uint32_t cullMask,
                                                      uint32_t rayCount, const VkasRay* pRays, VkasHit* pHits,
                                                      PFN_vkasIntersectAabb pfnIntersect, void* pUserData) {
-    return traceBatch(device, topLevel, mode, rayFlags, cullMask, rayCount, pRays, pHits, pfnIntersect, pUserData,
-                      "vkasTraceRaysProcedural");
+    return vkas::guarded([&] {
+        return traceBatch(device, topLevel, mode, rayFlags, cullMask, rayCount, pRays, pHits, pfnIntersect,
+                          pUserData, kTraceRaysProceduralVuids);
+    });
 }

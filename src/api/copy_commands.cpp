@@ -10,6 +10,7 @@
 #include <unordered_map>
 
 #include "api/entry_points.hpp"
+#include "api/guard.hpp"
 #include "api/validation.hpp"
 #include "engine/format.hpp"
 #include "engine/format_check.hpp"
@@ -105,7 +106,12 @@ VkResult deserializeAccelerationStructure(const Device& device, const void* src,
                       view.deserializedSize))
         return VK_ERROR_UNKNOWN;
     MapContext context{&device, {}};
-    serial::deserializeBlock(view, to, &mapCached, &context);
+    try {
+        serial::deserializeBlock(view, to, &mapCached, &context);
+    } catch (...) {
+        markUnconstructed(dst);  // out of memory part-way (the handle cache): dst holds no structure
+        throw;
+    }
     dst.constructed = true;
     return VK_SUCCESS;
 }
@@ -117,9 +123,6 @@ namespace vkas::entry {
 namespace {
 using ull = unsigned long long;
 
-const AccelerationStructure* liveStructure(const Device* dev, VkAccelerationStructureKHR handle) {
-    return dev ? dev->live<AccelerationStructure>(handle, ObjectMagic::AccelerationStructure) : nullptr;
-}
 }  // namespace
 
 VKAPI_ATTR VkResult VKAPI_CALL CopyAccelerationStructureKHR(VkDevice device, VkDeferredOperationKHR deferredOperation,
@@ -130,7 +133,10 @@ VKAPI_ATTR VkResult VKAPI_CALL CopyAccelerationStructureKHR(VkDevice device, VkD
         if (!v.check(dev != nullptr, "VUID-vkCopyAccelerationStructureKHR-device-parameter",
                      "device is not a valid VkDevice."))
             return VK_ERROR_VALIDATION_FAILED_EXT;
-        checkDeferredOperation(v, *dev, deferredOperation, "vkCopyAccelerationStructureKHR");
+        checkDeferredOperation(v, *dev, deferredOperation,
+                               {"VUID-vkCopyAccelerationStructureKHR-deferredOperation-parameter",
+                                "VUID-vkCopyAccelerationStructureKHR-deferredOperation-parent",
+                                "VUID-vkCopyAccelerationStructureKHR-deferredOperation-03678"});
         if (!v.check(pInfo != nullptr, "VUID-vkCopyAccelerationStructureKHR-pInfo-parameter", "pInfo is NULL."))
             return VK_ERROR_VALIDATION_FAILED_EXT;
         v.check(pInfo->sType == VK_STRUCTURE_TYPE_COPY_ACCELERATION_STRUCTURE_INFO_KHR,
@@ -146,21 +152,21 @@ VKAPI_ATTR VkResult VKAPI_CALL CopyAccelerationStructureKHR(VkDevice device, VkD
             v.check(compact || pInfo->mode == VK_COPY_ACCELERATION_STRUCTURE_MODE_CLONE_KHR,
                     "VUID-VkCopyAccelerationStructureInfoKHR-mode-03410", "pInfo->mode is %d, not CLONE or COMPACT.",
                     int(pInfo->mode));
-        const AccelerationStructure* src = liveStructure(dev, pInfo->src);
-        const AccelerationStructure* dst = liveStructure(dev, pInfo->dst);
-        v.check(src != nullptr, "VUID-VkCopyAccelerationStructureInfoKHR-src-parameter",
-                "pInfo->src is not a live VkAccelerationStructureKHR.");
-        v.check(dst != nullptr, "VUID-VkCopyAccelerationStructureInfoKHR-dst-parameter",
-                "pInfo->dst is not a live VkAccelerationStructureKHR.");
+        const auto* src = checkHandle<AccelerationStructure>(
+            v, *dev, pInfo->src, ObjectMagic::AccelerationStructure, "VUID-VkCopyAccelerationStructureInfoKHR-src-parameter",
+            "VUID-VkCopyAccelerationStructureInfoKHR-commonparent", "pInfo->src");
+        const auto* dst = checkHandle<AccelerationStructure>(
+            v, *dev, pInfo->dst, ObjectMagic::AccelerationStructure, "VUID-VkCopyAccelerationStructureInfoKHR-dst-parameter",
+            "VUID-VkCopyAccelerationStructureInfoKHR-commonparent", "pInfo->dst");
         const std::byte* block = nullptr;
-        if (src && v.check(src->buffer->memory != nullptr, "VUID-vkCopyAccelerationStructureKHR-buffer-03727",
+        if (src && v.check(src->buffer->memory != nullptr, "VUID-VkCopyAccelerationStructureInfoKHR-buffer-03718",
                            "the buffer of pInfo->src is not bound to memory.")) {
             block = constructedBlock(*src);
             v.check(block != nullptr, "VUID-vkCopyAccelerationStructureKHR-src-11586",
                     "pInfo->src has not been constructed (built, copied or deserialized).");
         }
         if (dst)
-            v.check(dst->buffer->memory != nullptr, "VUID-vkCopyAccelerationStructureKHR-buffer-03728",
+            v.check(dst->buffer->memory != nullptr, "VUID-VkCopyAccelerationStructureInfoKHR-buffer-03719",
                     "the buffer of pInfo->dst is not bound to memory.");
         if (block) {
             const format::Header* h = format::header(block);
@@ -171,8 +177,8 @@ VKAPI_ATTR VkResult VKAPI_CALL CopyAccelerationStructureKHR(VkDevice device, VkD
             if (dst && dst->buffer->memory) {
                 const uint64_t need = serial::compactedSize(block);
                 v.check(dst->size >= need,
-                        compact ? "VUID-VkCopyAccelerationStructureInfoKHR-dst-12419"
-                                : "VUID-VkCopyAccelerationStructureInfoKHR-dst-12418",
+                        compact ? "VUID-VkCopyAccelerationStructureInfoKHR-mode-12419"
+                                : "VUID-VkCopyAccelerationStructureInfoKHR-mode-12418",
                         "pInfo->dst has size %llu but the %s needs %llu bytes (the %s query of pInfo->src).",
                         (ull)dst->size, compact ? "compacted copy" : "clone", (ull)need,
                         compact ? "ACCELERATION_STRUCTURE_COMPACTED_SIZE_KHR" : "ACCELERATION_STRUCTURE_SIZE_KHR");
@@ -198,7 +204,10 @@ VKAPI_ATTR VkResult VKAPI_CALL CopyAccelerationStructureToMemoryKHR(
         if (!v.check(dev != nullptr, "VUID-vkCopyAccelerationStructureToMemoryKHR-device-parameter",
                      "device is not a valid VkDevice."))
             return VK_ERROR_VALIDATION_FAILED_EXT;
-        checkDeferredOperation(v, *dev, deferredOperation, "vkCopyAccelerationStructureToMemoryKHR");
+        checkDeferredOperation(v, *dev, deferredOperation,
+                               {"VUID-vkCopyAccelerationStructureToMemoryKHR-deferredOperation-parameter",
+                                "VUID-vkCopyAccelerationStructureToMemoryKHR-deferredOperation-parent",
+                                "VUID-vkCopyAccelerationStructureToMemoryKHR-deferredOperation-03678"});
         if (!v.check(pInfo != nullptr, "VUID-vkCopyAccelerationStructureToMemoryKHR-pInfo-parameter",
                      "pInfo is NULL."))
             return VK_ERROR_VALIDATION_FAILED_EXT;
@@ -214,10 +223,11 @@ VKAPI_ATTR VkResult VKAPI_CALL CopyAccelerationStructureToMemoryKHR(
             v.check(pInfo->mode == VK_COPY_ACCELERATION_STRUCTURE_MODE_SERIALIZE_KHR,
                     "VUID-VkCopyAccelerationStructureToMemoryInfoKHR-mode-03412", "pInfo->mode is %d, not SERIALIZE.",
                     int(pInfo->mode));
-        const AccelerationStructure* src = liveStructure(dev, pInfo->src);
-        if (v.check(src != nullptr, "VUID-VkCopyAccelerationStructureToMemoryInfoKHR-src-parameter",
-                    "pInfo->src is not a live VkAccelerationStructureKHR.") &&
-            v.check(src->buffer->memory != nullptr, "VUID-vkCopyAccelerationStructureToMemoryKHR-buffer-03731",
+        const auto* src = checkHandle<AccelerationStructure>(
+            v, *dev, pInfo->src, ObjectMagic::AccelerationStructure,
+            "VUID-VkCopyAccelerationStructureToMemoryInfoKHR-src-parameter", nullptr, "pInfo->src");
+        if (src &&
+            v.check(src->buffer->memory != nullptr, "VUID-VkCopyAccelerationStructureToMemoryInfoKHR-mode-11714",
                     "the buffer of pInfo->src is not bound to memory."))
             v.check(constructedBlock(*src) != nullptr, "VUID-VkCopyAccelerationStructureToMemoryInfoKHR-src-04959",
                     "pInfo->src has not been constructed (built, copied or deserialized).");
@@ -243,7 +253,10 @@ VKAPI_ATTR VkResult VKAPI_CALL CopyMemoryToAccelerationStructureKHR(
         if (!v.check(dev != nullptr, "VUID-vkCopyMemoryToAccelerationStructureKHR-device-parameter",
                      "device is not a valid VkDevice."))
             return VK_ERROR_VALIDATION_FAILED_EXT;
-        checkDeferredOperation(v, *dev, deferredOperation, "vkCopyMemoryToAccelerationStructureKHR");
+        checkDeferredOperation(v, *dev, deferredOperation,
+                               {"VUID-vkCopyMemoryToAccelerationStructureKHR-deferredOperation-parameter",
+                                "VUID-vkCopyMemoryToAccelerationStructureKHR-deferredOperation-parent",
+                                "VUID-vkCopyMemoryToAccelerationStructureKHR-deferredOperation-03678"});
         if (!v.check(pInfo != nullptr, "VUID-vkCopyMemoryToAccelerationStructureKHR-pInfo-parameter",
                      "pInfo is NULL."))
             return VK_ERROR_VALIDATION_FAILED_EXT;
@@ -259,10 +272,11 @@ VKAPI_ATTR VkResult VKAPI_CALL CopyMemoryToAccelerationStructureKHR(
             v.check(pInfo->mode == VK_COPY_ACCELERATION_STRUCTURE_MODE_DESERIALIZE_KHR,
                     "VUID-VkCopyMemoryToAccelerationStructureInfoKHR-mode-03413",
                     "pInfo->mode is %d, not DESERIALIZE.", int(pInfo->mode));
-        const AccelerationStructure* dst = liveStructure(dev, pInfo->dst);
-        if (v.check(dst != nullptr, "VUID-VkCopyMemoryToAccelerationStructureInfoKHR-dst-parameter",
-                    "pInfo->dst is not a live VkAccelerationStructureKHR."))
-            v.check(dst->buffer->memory != nullptr, "VUID-vkCopyMemoryToAccelerationStructureKHR-buffer-03730",
+        const auto* dst = checkHandle<AccelerationStructure>(
+            v, *dev, pInfo->dst, ObjectMagic::AccelerationStructure,
+            "VUID-VkCopyMemoryToAccelerationStructureInfoKHR-dst-parameter", nullptr, "pInfo->dst");
+        if (dst)
+            v.check(dst->buffer->memory != nullptr, "VUID-VkCopyMemoryToAccelerationStructureInfoKHR-dst-11717",
                     "the buffer of pInfo->dst is not bound to memory.");
         const void* src = pInfo->src.hostAddress;
         if (v.check(src != nullptr, "VUID-vkCopyMemoryToAccelerationStructureKHR-pInfo-03729",

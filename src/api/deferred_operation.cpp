@@ -7,6 +7,7 @@
 
 #include "api/device.hpp"
 #include "api/entry_points.hpp"
+#include "api/guard.hpp"
 #include "api/validation.hpp"
 
 namespace vkas {
@@ -14,39 +15,74 @@ namespace vkas {
 DeferredOperation::DeferredOperation() {
     parallelFor_ = [this](uint32_t count, const std::function<void(uint32_t)>& fn) {
         if (count == 0) return;
-        auto left = std::make_shared<uint32_t>(count);
+        // A call that throws (out of memory), or queueing that fails, is recorded and rethrown here, on the calling
+        // thread, once every queued call has finished: nothing queued is left referring to fn.
+        struct Batch {
+            uint32_t left;
+            std::exception_ptr error;
+        };
+        auto batch = std::make_shared<Batch>(Batch{count, nullptr});
         std::unique_lock<std::mutex> lock(mutex_);
-        for (uint32_t i = 0; i < count; ++i)
-            queue_.push_back([this, i, &fn, left] {
-                fn(i);
-                std::lock_guard<std::mutex> guard(mutex_);
-                if (--*left == 0) changed_.notify_all();
-            });
+        for (uint32_t i = 0; i < count; ++i) {
+            try {
+                queue_.push_back([this, i, &fn, batch] {
+                    std::exception_ptr error;
+                    try {
+                        fn(i);
+                    } catch (...) {
+                        error = std::current_exception();
+                    }
+                    std::lock_guard<std::mutex> guard(mutex_);
+                    if (error && !batch->error) batch->error = error;
+                    if (--batch->left == 0) changed_.notify_all();
+                });
+            } catch (...) {
+                batch->left -= count - i;  // never queued: they will not run
+                if (!batch->error) batch->error = std::current_exception();
+                break;
+            }
+        }
         changed_.notify_all();
         // Help: run queued tasks (ours or others') until all of ours have run.
-        while (*left > 0) {
+        while (batch->left > 0) {
             if (!queue_.empty())
                 runOne(lock);
             else
                 changed_.wait(lock);
         }
+        if (batch->error) {
+            std::exception_ptr error = batch->error;
+            lock.unlock();
+            std::rethrow_exception(error);
+        }
     };
 }
 
 void DeferredOperation::start(std::vector<Task> tasks, std::function<VkResult()> finish, uint32_t concurrencyHint) {
+    // Everything that allocates comes first: a start that throws (out of memory) leaves the operation as it was.
+    // A task that throws makes the operation's result VK_ERROR_OUT_OF_HOST_MEMORY (currentExceptionResult).
+    std::deque<Task> queue;
+    for (Task& t : tasks)
+        queue.push_back([this, t = std::move(t)] {
+            VkResult failure = VK_SUCCESS;
+            try {
+                t();
+            } catch (...) {
+                failure = currentExceptionResult();
+            }
+            std::lock_guard<std::mutex> guard(mutex_);
+            if (failure != VK_SUCCESS && failure_ == VK_SUCCESS) failure_ = failure;
+            --topLevelLeft_;
+        });
     std::lock_guard<std::mutex> lock(mutex_);
     pending_ = true;
     finishing_ = false;
     result_ = VK_NOT_READY;
+    failure_ = VK_SUCCESS;
     finish_ = std::move(finish);
     concurrencyHint_ = std::max(1u, concurrencyHint);
-    topLevelLeft_ = uint32_t(tasks.size());
-    for (Task& t : tasks)
-        queue_.push_back([this, t = std::move(t)] {
-            t();
-            std::lock_guard<std::mutex> guard(mutex_);
-            --topLevelLeft_;
-        });
+    topLevelLeft_ = uint32_t(queue.size());
+    queue_.swap(queue);  // queue_ is empty: the operation was complete
 }
 
 void DeferredOperation::runOne(std::unique_lock<std::mutex>& lock) {
@@ -72,9 +108,14 @@ VkResult DeferredOperation::join() {
             // Everything ran: this thread completes the operation.
             finishing_ = true;
             lock.unlock();
-            const VkResult r = finish_ ? finish_() : VK_SUCCESS;
+            VkResult r;
+            try {
+                r = finish_ ? finish_() : VK_SUCCESS;
+            } catch (...) {
+                r = currentExceptionResult();
+            }
             lock.lock();
-            result_ = r;
+            result_ = failure_ != VK_SUCCESS ? failure_ : r;
             pending_ = false;
             finish_ = nullptr;
             changed_.notify_all();
@@ -102,12 +143,12 @@ bool DeferredOperation::pending() {
     return pending_;
 }
 
-void checkDeferredOperation(Validator& v, const Device& device, VkDeferredOperationKHR operation, const char* command) {
+void checkDeferredOperation(Validator& v, const Device& device, VkDeferredOperationKHR operation,
+                            const DeferredOperationVuids& vuids) {
     if (operation == VK_NULL_HANDLE) return;
-    auto* op = device.live<DeferredOperation>(operation, ObjectMagic::DeferredOperation);
-    const std::string vuid = std::string("VUID-") + command + "-deferredOperation-";
-    if (v.check(op != nullptr, (vuid + "parameter").c_str(), "deferredOperation is not a valid VkDeferredOperationKHR."))
-        v.check(!op->pending(), (vuid + "03678").c_str(),
+    if (auto* op = checkHandle<DeferredOperation>(v, device, operation, ObjectMagic::DeferredOperation,
+                                                  vuids.parameter, vuids.parent, "deferredOperation"))
+        v.check(!op->pending(), vuids.pending,
                 "deferredOperation still has a deferred command pending: join it until it completes first.");
 }
 
@@ -131,52 +172,65 @@ DeferredOperation* liveOperation(Device* dev, VkDeferredOperationKHR op) {
 }
 }  // namespace
 
-VKAPI_ATTR VkResult VKAPI_CALL CreateDeferredOperationKHR(VkDevice device, const VkAllocationCallbacks*,
+VKAPI_ATTR VkResult VKAPI_CALL CreateDeferredOperationKHR(VkDevice device, const VkAllocationCallbacks* pAllocator,
                                                           VkDeferredOperationKHR* pDeferredOperation) {
     Device* dev = Device::fromHandle(device);
     Validator v(dev, "vkCreateDeferredOperationKHR");
+    if (!dev) {
+        v.fail("VUID-vkCreateDeferredOperationKHR-device-parameter", "device is not a valid VkDevice.");
+        return VK_ERROR_VALIDATION_FAILED_EXT;
+    }
     if (v.enabled()) {
-        v.check(dev != nullptr, "VUID-vkCreateDeferredOperationKHR-device-parameter", "device is not a valid VkDevice.");
         v.check(pDeferredOperation != nullptr, "VUID-vkCreateDeferredOperationKHR-pDeferredOperation-parameter",
                 "pDeferredOperation is NULL.");
         if (v.failed()) return VK_ERROR_VALIDATION_FAILED_EXT;
     }
-    auto* op = new (std::nothrow) DeferredOperation;
+    auto* op = createObject<DeferredOperation>(pAllocator);
     if (!op) return VK_ERROR_OUT_OF_HOST_MEMORY;
     op->device = dev;
-    dev->track(op);
+    if (!dev->track(op)) {
+        destroyObject(op);
+        return VK_ERROR_OUT_OF_HOST_MEMORY;
+    }
     *pDeferredOperation = toHandle<VkDeferredOperationKHR>(op);
     return VK_SUCCESS;
 }
 
 VKAPI_ATTR void VKAPI_CALL DestroyDeferredOperationKHR(VkDevice device, VkDeferredOperationKHR operation,
-                                                       const VkAllocationCallbacks*) {
-    if (operation == VK_NULL_HANDLE) return;
+                                                       const VkAllocationCallbacks* pAllocator) {
     Device* dev = Device::fromHandle(device);
     Validator v(dev, "vkDestroyDeferredOperationKHR");
+    if (!dev) return v.fail("VUID-vkDestroyDeferredOperationKHR-device-parameter", "device is not a valid VkDevice.");
+    if (operation == VK_NULL_HANDLE) return;
     DeferredOperation* op = liveOperation(dev, operation);
     if (v.enabled()) {
-        if (!v.check(op != nullptr, "VUID-vkDestroyDeferredOperationKHR-operation-parameter",
-                     "operation 0x%llx is not a live VkDeferredOperationKHR.",
-                     (unsigned long long)(uintptr_t)operation))
-            return;
+        op = checkHandle<DeferredOperation>(v, *dev, operation, ObjectMagic::DeferredOperation,
+                                            "VUID-vkDestroyDeferredOperationKHR-operation-parameter",
+                                            "VUID-vkDestroyDeferredOperationKHR-operation-parent", "operation");
+        if (!op) return;
         v.check(!op->pending(), "VUID-vkDestroyDeferredOperationKHR-operation-03436",
                 "operation is not complete: join it until it completes before destroying it.");
+        checkDestroyAllocator(v, op->allocator, pAllocator, "VUID-vkDestroyDeferredOperationKHR-operation-03434",
+                              "VUID-vkDestroyDeferredOperationKHR-operation-03435");
         if (v.failed()) return;
     }
     if (!op) return;
     dev->untrack(op);
-    op->magic = ObjectMagic::Dead;
-    delete op;
+    destroyObject(op);
 }
 
 VKAPI_ATTR uint32_t VKAPI_CALL GetDeferredOperationMaxConcurrencyKHR(VkDevice device,
                                                                     VkDeferredOperationKHR operation) {
     Device* dev = Device::fromHandle(device);
     Validator v(dev, "vkGetDeferredOperationMaxConcurrencyKHR");
+    if (!dev) {
+        v.fail("VUID-vkGetDeferredOperationMaxConcurrencyKHR-device-parameter", "device is not a valid VkDevice.");
+        return 0;
+    }
     DeferredOperation* op = liveOperation(dev, operation);
-    if (v.enabled() && !v.check(op != nullptr, "VUID-vkGetDeferredOperationMaxConcurrencyKHR-operation-parameter",
-                                "operation is not a live VkDeferredOperationKHR."))
+    if (v.enabled() && !checkHandle<DeferredOperation>(v, *dev, operation, ObjectMagic::DeferredOperation,
+                                                       "VUID-vkGetDeferredOperationMaxConcurrencyKHR-operation-parameter",
+                                                       "VUID-vkGetDeferredOperationMaxConcurrencyKHR-operation-parent", "operation"))
         return 0;
     return op ? op->maxConcurrency() : 0;
 }
@@ -184,9 +238,14 @@ VKAPI_ATTR uint32_t VKAPI_CALL GetDeferredOperationMaxConcurrencyKHR(VkDevice de
 VKAPI_ATTR VkResult VKAPI_CALL GetDeferredOperationResultKHR(VkDevice device, VkDeferredOperationKHR operation) {
     Device* dev = Device::fromHandle(device);
     Validator v(dev, "vkGetDeferredOperationResultKHR");
+    if (!dev) {
+        v.fail("VUID-vkGetDeferredOperationResultKHR-device-parameter", "device is not a valid VkDevice.");
+        return VK_ERROR_VALIDATION_FAILED_EXT;
+    }
     DeferredOperation* op = liveOperation(dev, operation);
-    if (v.enabled() && !v.check(op != nullptr, "VUID-vkGetDeferredOperationResultKHR-operation-parameter",
-                                "operation is not a live VkDeferredOperationKHR."))
+    if (v.enabled() && !checkHandle<DeferredOperation>(v, *dev, operation, ObjectMagic::DeferredOperation,
+                                                       "VUID-vkGetDeferredOperationResultKHR-operation-parameter",
+                                                       "VUID-vkGetDeferredOperationResultKHR-operation-parent", "operation"))
         return VK_ERROR_VALIDATION_FAILED_EXT;
     return op ? op->result() : VK_ERROR_UNKNOWN;
 }
@@ -194,9 +253,14 @@ VKAPI_ATTR VkResult VKAPI_CALL GetDeferredOperationResultKHR(VkDevice device, Vk
 VKAPI_ATTR VkResult VKAPI_CALL DeferredOperationJoinKHR(VkDevice device, VkDeferredOperationKHR operation) {
     Device* dev = Device::fromHandle(device);
     Validator v(dev, "vkDeferredOperationJoinKHR");
+    if (!dev) {
+        v.fail("VUID-vkDeferredOperationJoinKHR-device-parameter", "device is not a valid VkDevice.");
+        return VK_ERROR_VALIDATION_FAILED_EXT;
+    }
     DeferredOperation* op = liveOperation(dev, operation);
-    if (v.enabled() && !v.check(op != nullptr, "VUID-vkDeferredOperationJoinKHR-operation-parameter",
-                                "operation is not a live VkDeferredOperationKHR."))
+    if (v.enabled() && !checkHandle<DeferredOperation>(v, *dev, operation, ObjectMagic::DeferredOperation,
+                                                       "VUID-vkDeferredOperationJoinKHR-operation-parameter",
+                                                       "VUID-vkDeferredOperationJoinKHR-operation-parent", "operation"))
         return VK_ERROR_VALIDATION_FAILED_EXT;
     return op ? op->join() : VK_ERROR_UNKNOWN;
 }

@@ -23,6 +23,7 @@ public:
 
     ObjectMagic magic = ObjectMagic::DeferredOperation;
     Device* device = nullptr;
+    VkAllocationCallbacks allocator{};  // the pAllocator of vkCreateDeferredOperationKHR (zero: none)
 
     // Makes the operation pending: nothing runs until a thread joins. `finish` runs once, after every task (and
     // everything they spread), on the thread that completes the operation; its result becomes the operation's.
@@ -50,6 +51,7 @@ private:
     bool finishing_ = false;
     uint32_t concurrencyHint_ = 1;
     VkResult result_ = VK_SUCCESS;  // a new operation is complete with VK_SUCCESS
+    VkResult failure_ = VK_SUCCESS;  // a task that threw (out of memory): the operation's result instead of finish's
     std::function<VkResult()> finish_;
     ParallelFor parallelFor_;
 
@@ -59,9 +61,16 @@ public:
 
 class Validator;
 
-// Checks a deferrable command's deferredOperation parameter: a live operation (-deferredOperation-parameter) with
-// no deferred command still pending (-deferredOperation-03678). VK_NULL_HANDLE is always valid.
-void checkDeferredOperation(Validator& v, const Device& device, VkDeferredOperationKHR operation, const char* command);
+// The deferredOperation VUIDs of one deferrable command.
+struct DeferredOperationVuids {
+    const char* parameter;  // -deferredOperation-parameter: a live VkDeferredOperationKHR
+    const char* parent;     // -deferredOperation-parent: of this device
+    const char* pending;    // -deferredOperation-03678: no deferred command still pending on it
+};
+
+// Checks a deferrable command's deferredOperation parameter. VK_NULL_HANDLE is always valid.
+void checkDeferredOperation(Validator& v, const Device& device, VkDeferredOperationKHR operation,
+                            const DeferredOperationVuids& vuids);
 
 // Runs `work` now when operation is VK_NULL_HANDLE and returns its result; otherwise makes it the operation's one
 // task (its result becomes the operation's) and returns VK_OPERATION_DEFERRED_KHR.

@@ -1,39 +1,90 @@
 #include "api/device.hpp"
 
 #include "api/deferred_operation.hpp"
+#include "api/guard.hpp"
 
 #include "api/validation.hpp"
 #include "engine/format.hpp"
 
 #include <cstdlib>
+#include <shared_mutex>
+#include <unordered_map>
 #include <new>
 #include <vector>
 #include <thread>
 
 namespace vkas {
 
-Device::Device(const VkasDeviceCreateInfo& info) : info_(info) {}
+namespace {
+// Every live device and object of the process, with the device that owns it (a device owns itself). Handles are
+// looked up here before they are dereferenced, so an unknown, destroyed or foreign handle is recognised without
+// touching the memory it points to.
+std::shared_mutex gRegistryMutex;
+std::unordered_map<const void*, Device*>& registry() {
+    static auto* objects = new std::unordered_map<const void*, Device*>;  // never destroyed: used until exit
+    return *objects;
+}
+}  // namespace
+
+Device::Device(const VkasDeviceCreateInfo& info) : info_(info) {
+    std::unique_lock lock(gRegistryMutex);
+    registry().emplace(this, this);
+}
+
+Device::~Device() {
+    magic_ = 0;
+    std::unique_lock lock(gRegistryMutex);
+    registry().erase(this);
+}
 
 Device* Device::fromHandle(VkDevice device) {
-    auto* d = reinterpret_cast<Device*>(device);
-    return (d && d->magic_ == kMagic) ? d : nullptr;
+    if (!device) return nullptr;
+    std::shared_lock lock(gRegistryMutex);
+    auto it = registry().find(device);
+    return it != registry().end() && it->second == static_cast<const void*>(device) ? it->second : nullptr;
+}
+
+Device* Device::ownerOf(const void* object) {
+    if (!object) return nullptr;
+    std::shared_lock lock(gRegistryMutex);
+    auto it = registry().find(object);
+    return it != registry().end() && it->second != object ? it->second : nullptr;
 }
 
 ThreadPool& Device::workers() {
-    std::call_once(workersOnce_, [&] {
+    std::lock_guard lock(workersMutex_);
+    if (!workers_) {
         uint32_t n = info_.workerThreadCount;
         if (n == 0) n = std::max(1u, std::thread::hardware_concurrency());
         workers_ = std::make_unique<ThreadPool>(n);
-    });
+    }
     return *workers_;
 }
 
-void Device::track(const void* object) {
-    std::lock_guard lock(mutex_);
-    objects_.insert(object);
+bool Device::track(const void* object) noexcept {
+    // Out of memory in either set leaves both as they were.
+    try {
+        std::unique_lock lock(gRegistryMutex);
+        registry()[object] = this;
+    } catch (...) {
+        return false;
+    }
+    try {
+        std::lock_guard lock(mutex_);
+        objects_.insert(object);
+    } catch (...) {
+        std::unique_lock lock(gRegistryMutex);
+        registry().erase(object);
+        return false;
+    }
+    return true;
 }
 
 void Device::untrack(const void* object) {
+    {
+        std::unique_lock lock(gRegistryMutex);
+        registry().erase(object);
+    }
     std::lock_guard lock(mutex_);
     objects_.erase(object);
 }
@@ -57,36 +108,34 @@ AccelerationStructure* Device::structureAtAddress(uint64_t address) const {
 
 size_t Device::releaseAll() {
     std::lock_guard lock(mutex_);
-    std::vector<void*> structures, buffers, memories, operations;
-    for (const void* o : objects_) {
-        auto* p = const_cast<void*>(o);
-        switch (*static_cast<ObjectMagic*>(p)) {
-            case ObjectMagic::AccelerationStructure: structures.push_back(p); break;
-            case ObjectMagic::Buffer: buffers.push_back(p); break;
-            case ObjectMagic::Memory: memories.push_back(p); break;
-            case ObjectMagic::DeferredOperation: operations.push_back(p); break;
-            default: break;
+    {
+        std::unique_lock registryLock(gRegistryMutex);
+        for (const void* o : objects_) registry().erase(o);
+    }
+    // One pass per type, in dependency order, erasing as it goes; allocates nothing (vkasDestroyDevice cannot
+    // fail). Each object is freed the way it was allocated (destroyObject: through its VkAllocationCallbacks, if any).
+    const size_t n = objects_.size();
+    for (ObjectMagic type : {ObjectMagic::DeferredOperation, ObjectMagic::AccelerationStructure, ObjectMagic::Buffer,
+                             ObjectMagic::Memory}) {
+        for (auto it = objects_.begin(); it != objects_.end();) {
+            auto* p = const_cast<void*>(*it);
+            if (*static_cast<ObjectMagic*>(p) != type) {
+                ++it;
+                continue;
+            }
+            it = objects_.erase(it);
+            switch (type) {
+                case ObjectMagic::DeferredOperation: destroyObject(static_cast<DeferredOperation*>(p)); break;
+                case ObjectMagic::AccelerationStructure: destroyObject(static_cast<AccelerationStructure*>(p)); break;
+                case ObjectMagic::Buffer: destroyObject(static_cast<Buffer*>(p)); break;
+                case ObjectMagic::Memory:
+                    std::free(static_cast<Memory*>(p)->data);
+                    destroyObject(static_cast<Memory*>(p));
+                    break;
+                default: break;
+            }
         }
     }
-    for (void* p : operations) {
-        static_cast<DeferredOperation*>(p)->magic = ObjectMagic::Dead;
-        delete static_cast<DeferredOperation*>(p);
-    }
-    for (void* p : structures) {
-        static_cast<AccelerationStructure*>(p)->magic = ObjectMagic::Dead;
-        delete static_cast<AccelerationStructure*>(p);
-    }
-    for (void* p : buffers) {
-        static_cast<Buffer*>(p)->magic = ObjectMagic::Dead;
-        delete static_cast<Buffer*>(p);
-    }
-    for (void* p : memories) {
-        auto* m = static_cast<Memory*>(p);
-        std::free(m->data);
-        m->magic = ObjectMagic::Dead;
-        delete m;
-    }
-    size_t n = objects_.size();
     objects_.clear();
     return n;
 }
@@ -104,6 +153,7 @@ const std::byte* resolveAccelerationStructure(uint64_t reference) {
 using vkas::Device;
 
 extern "C" VKAS_API VkResult vkasCreateDevice(const VkasDeviceCreateInfo* pCreateInfo, VkDevice* pDevice) {
+    return vkas::guarded([&] {
     if (!pDevice) return VK_ERROR_INITIALIZATION_FAILED;
     VkasDeviceCreateInfo info{};
     if (pCreateInfo) info = *pCreateInfo;
@@ -111,6 +161,7 @@ extern "C" VKAS_API VkResult vkasCreateDevice(const VkasDeviceCreateInfo* pCreat
     if (!device) return VK_ERROR_OUT_OF_HOST_MEMORY;
     *pDevice = device->handle();
     return VK_SUCCESS;
+    });
 }
 
 extern "C" VKAS_API void vkasDestroyDevice(VkDevice device) {

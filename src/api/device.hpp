@@ -16,9 +16,12 @@ namespace vkas {
 class Device {
 public:
     explicit Device(const VkasDeviceCreateInfo& info);
-    ~Device() { magic_ = 0; }
+    ~Device();
 
+    // The live device `device` is, or nullptr (unknown or destroyed handles are never dereferenced).
     static Device* fromHandle(VkDevice device);
+    // The device that owns the live object `object` (any type), or nullptr when no live object has that handle.
+    static Device* ownerOf(const void* object);
     VkDevice handle() { return reinterpret_cast<VkDevice>(this); }
 
     bool validationEnabled() const { return !info_.disableValidation; }
@@ -26,7 +29,8 @@ public:
     ThreadPool& workers();
 
     // Live-object registry, so validation can recognise unknown, destroyed or wrong-type handles.
-    void track(const void* object);
+    // track() returns false when the registry cannot grow (out of memory): the object is not registered.
+    bool track(const void* object) noexcept;
     void untrack(const void* object);
     bool isLive(const void* object) const;
     // Frees every object still alive (destroying a device with live children is invalid usage; reported by
@@ -50,7 +54,7 @@ private:
     VkasDeviceCreateInfo info_;
     mutable std::mutex mutex_;
     std::unordered_set<const void*> objects_;
-    std::once_flag workersOnce_;
+    std::mutex workersMutex_;  // not std::call_once: a pool that failed to start (out of memory) is retried
     std::unique_ptr<ThreadPool> workers_;
 };
 

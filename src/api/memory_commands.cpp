@@ -5,6 +5,7 @@
 
 #include "api/device.hpp"
 #include "api/entry_points.hpp"
+#include "api/guard.hpp"
 #include "api/validation.hpp"
 
 namespace vkas::entry {
@@ -12,55 +13,125 @@ namespace vkas::entry {
 namespace {
 constexpr VkDeviceSize kMemoryAlignment = 4096;  // allocations start on a page
 constexpr VkDeviceSize kBufferAlignment = 256;   // enough for acceleration structures (offset % 256)
+// The VkMemoryAllocateFlagsInfo in an allocation's pNext chain, or nullptr.
+const VkMemoryAllocateFlagsInfo* allocateFlagsInfo(const VkMemoryAllocateInfo& ai) {
+    for (auto* s = static_cast<const VkBaseInStructure*>(ai.pNext); s; s = s->pNext)
+        if (s->sType == VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_FLAGS_INFO)
+            return reinterpret_cast<const VkMemoryAllocateFlagsInfo*>(s);
+    return nullptr;
+}
+
+// VkBufferCreateInfo. vkas enables no sparse, protected-memory or capture-replay feature and has one queue family;
+// usage and flag bits of extensions it does not enable are not valid values.
+void checkBufferCreateInfo(Validator& v, const VkBufferCreateInfo& ci) {
+    v.check(ci.sType == VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO, "VUID-VkBufferCreateInfo-sType-sType",
+            "pCreateInfo->sType is %d.", int(ci.sType));
+    checkNextChain(v, ci.pNext, {}, "VUID-VkBufferCreateInfo-pNext-pNext", nullptr, "pCreateInfo");
+    v.check(ci.size > 0, "VUID-VkBufferCreateInfo-size-00912", "pCreateInfo->size is 0.");
+    constexpr VkBufferCreateFlags kKnownFlags =
+        VK_BUFFER_CREATE_SPARSE_BINDING_BIT | VK_BUFFER_CREATE_SPARSE_RESIDENCY_BIT |
+        VK_BUFFER_CREATE_SPARSE_ALIASED_BIT | VK_BUFFER_CREATE_PROTECTED_BIT |
+        VK_BUFFER_CREATE_DEVICE_ADDRESS_CAPTURE_REPLAY_BIT;
+    v.check((ci.flags & ~kKnownFlags) == 0, "VUID-VkBufferCreateInfo-flags-parameter",
+            "pCreateInfo->flags 0x%x has bits that are not VkBufferCreateFlagBits of an enabled extension.", ci.flags);
+    constexpr VkBufferUsageFlags kKnownUsage =
+        VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT | VK_BUFFER_USAGE_UNIFORM_TEXEL_BUFFER_BIT |
+        VK_BUFFER_USAGE_STORAGE_TEXEL_BUFFER_BIT | VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT | VK_BUFFER_USAGE_STORAGE_BUFFER_BIT |
+        VK_BUFFER_USAGE_INDEX_BUFFER_BIT | VK_BUFFER_USAGE_VERTEX_BUFFER_BIT | VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT |
+        VK_BUFFER_USAGE_SHADER_DEVICE_ADDRESS_BIT |
+        VK_BUFFER_USAGE_ACCELERATION_STRUCTURE_BUILD_INPUT_READ_ONLY_BIT_KHR |
+        VK_BUFFER_USAGE_ACCELERATION_STRUCTURE_STORAGE_BIT_KHR | VK_BUFFER_USAGE_SHADER_BINDING_TABLE_BIT_KHR;
+    v.check((ci.usage & ~kKnownUsage) == 0, "VUID-VkBufferCreateInfo-usage-parameter",
+            "pCreateInfo->usage 0x%x has bits that are not VkBufferUsageFlagBits of an enabled extension.", ci.usage);
+    v.check(ci.usage != 0, "VUID-VkBufferCreateInfo-usage-requiredbitmask", "pCreateInfo->usage is 0.");
+    if (!v.check(ci.sharingMode == VK_SHARING_MODE_EXCLUSIVE || ci.sharingMode == VK_SHARING_MODE_CONCURRENT,
+                 "VUID-VkBufferCreateInfo-sharingMode-parameter", "pCreateInfo->sharingMode %d is not valid.",
+                 int(ci.sharingMode)))
+        return;
+    if (ci.sharingMode == VK_SHARING_MODE_CONCURRENT) {
+        v.check(ci.queueFamilyIndexCount > 1, "VUID-VkBufferCreateInfo-sharingMode-00914",
+                "sharingMode is CONCURRENT but queueFamilyIndexCount is %u.", ci.queueFamilyIndexCount);
+        if (v.check(ci.pQueueFamilyIndices != nullptr || ci.queueFamilyIndexCount == 0,
+                    "VUID-VkBufferCreateInfo-sharingMode-00913",
+                    "sharingMode is CONCURRENT but pQueueFamilyIndices is NULL.")) {
+            // vkas has one queue family (index 0); the indices must be unique and below the family count.
+            for (uint32_t i = 0; i < ci.queueFamilyIndexCount && ci.queueFamilyIndexCount > 1; ++i)
+                if (!v.check(ci.pQueueFamilyIndices[i] == 0 && i == 0, "VUID-VkBufferCreateInfo-sharingMode-01419",
+                             "pQueueFamilyIndices[%u] is %u: vkas has one queue family, so the indices cannot be unique "
+                             "and below 1.",
+                             i, ci.pQueueFamilyIndices[i]))
+                    break;
+        }
+    }
+    v.check(!(ci.flags & VK_BUFFER_CREATE_SPARSE_BINDING_BIT), "VUID-VkBufferCreateInfo-flags-00915",
+            "pCreateInfo->flags has SPARSE_BINDING but the sparseBinding feature is not enabled.");
+    v.check(!(ci.flags & VK_BUFFER_CREATE_SPARSE_RESIDENCY_BIT), "VUID-VkBufferCreateInfo-flags-00916",
+            "pCreateInfo->flags has SPARSE_RESIDENCY but the sparseResidencyBuffer feature is not enabled.");
+    v.check(!(ci.flags & VK_BUFFER_CREATE_SPARSE_ALIASED_BIT), "VUID-VkBufferCreateInfo-flags-00917",
+            "pCreateInfo->flags has SPARSE_ALIASED but the sparseResidencyAliased feature is not enabled.");
+    if (ci.flags & (VK_BUFFER_CREATE_SPARSE_RESIDENCY_BIT | VK_BUFFER_CREATE_SPARSE_ALIASED_BIT))
+        v.check(ci.flags & VK_BUFFER_CREATE_SPARSE_BINDING_BIT, "VUID-VkBufferCreateInfo-flags-00918",
+                "pCreateInfo->flags has SPARSE_RESIDENCY or SPARSE_ALIASED without SPARSE_BINDING.");
+    v.check(!(ci.flags & VK_BUFFER_CREATE_PROTECTED_BIT), "VUID-VkBufferCreateInfo-flags-01887",
+            "pCreateInfo->flags has PROTECTED but the protectedMemory feature is not enabled.");
+    v.check(!(ci.flags & VK_BUFFER_CREATE_DEVICE_ADDRESS_CAPTURE_REPLAY_BIT), "VUID-VkBufferCreateInfo-flags-06549",
+            "pCreateInfo->flags has DEVICE_ADDRESS_CAPTURE_REPLAY but the bufferDeviceAddressCaptureReplay feature is "
+            "not enabled.");
+}
+
 }  // namespace
 
 VKAPI_ATTR VkResult VKAPI_CALL CreateBuffer(VkDevice device, const VkBufferCreateInfo* pCreateInfo,
-                                            const VkAllocationCallbacks*, VkBuffer* pBuffer) {
+                                            const VkAllocationCallbacks* pAllocator, VkBuffer* pBuffer) {
     Device* dev = Device::fromHandle(device);
     Validator v(dev, "vkCreateBuffer");
     if (v.enabled()) {
         v.check(dev != nullptr, "VUID-vkCreateBuffer-device-parameter", "device is not a valid VkDevice.");
-        if (v.check(pCreateInfo != nullptr, "VUID-vkCreateBuffer-pCreateInfo-parameter", "pCreateInfo is NULL.")) {
-            v.check(pCreateInfo->sType == VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO, "VUID-VkBufferCreateInfo-sType-sType",
-                    "pCreateInfo->sType is %d.", int(pCreateInfo->sType));
-            v.check(pCreateInfo->size > 0, "VUID-VkBufferCreateInfo-size-00912", "pCreateInfo->size is 0.");
-        }
+        if (v.check(pCreateInfo != nullptr, "VUID-vkCreateBuffer-pCreateInfo-parameter", "pCreateInfo is NULL."))
+            checkBufferCreateInfo(v, *pCreateInfo);
         v.check(pBuffer != nullptr, "VUID-vkCreateBuffer-pBuffer-parameter", "pBuffer is NULL.");
         if (v.failed()) return VK_ERROR_VALIDATION_FAILED_EXT;
     }
-    auto* buffer = new (std::nothrow) Buffer;
+    auto* buffer = createObject<Buffer>(pAllocator);
     if (!buffer) return VK_ERROR_OUT_OF_HOST_MEMORY;
     buffer->device = dev;
     buffer->size = pCreateInfo->size;
     buffer->usage = pCreateInfo->usage;
     buffer->flags = pCreateInfo->flags;
-    dev->track(buffer);
+    if (!dev->track(buffer)) {
+        destroyObject(buffer);
+        return VK_ERROR_OUT_OF_HOST_MEMORY;
+    }
     *pBuffer = toHandle<VkBuffer>(buffer);
     return VK_SUCCESS;
 }
 
-VKAPI_ATTR void VKAPI_CALL DestroyBuffer(VkDevice device, VkBuffer buffer, const VkAllocationCallbacks*) {
+VKAPI_ATTR void VKAPI_CALL DestroyBuffer(VkDevice device, VkBuffer buffer, const VkAllocationCallbacks* pAllocator) {
     Device* dev = Device::fromHandle(device);
-    if (buffer == VK_NULL_HANDLE) return;
     Validator v(dev, "vkDestroyBuffer");
+    if (!dev) return v.fail("VUID-vkDestroyBuffer-device-parameter", "device is not a valid VkDevice.");
+    if (buffer == VK_NULL_HANDLE) return;
     if (v.enabled()) {
-        v.check(dev && dev->live<Buffer>(buffer, ObjectMagic::Buffer), "VUID-vkDestroyBuffer-buffer-parameter",
-                "buffer 0x%llx is not a live VkBuffer.", (unsigned long long)(uintptr_t)buffer);
+        const Buffer* b = checkHandle<Buffer>(v, *dev, buffer, ObjectMagic::Buffer, "VUID-vkDestroyBuffer-buffer-parameter",
+                                              "VUID-vkDestroyBuffer-buffer-parent", "buffer");
+        if (!b) return;
+        checkDestroyAllocator(v, b->allocator, pAllocator, "VUID-vkDestroyBuffer-buffer-00923",
+                              "VUID-vkDestroyBuffer-buffer-00924");
         if (v.failed()) return;
     }
     auto* b = fromHandle<Buffer>(buffer);
     if (dev) dev->untrack(b);
-    b->magic = ObjectMagic::Dead;
-    delete b;
+    destroyObject(b);
 }
 
 VKAPI_ATTR void VKAPI_CALL GetBufferMemoryRequirements(VkDevice device, VkBuffer buffer,
                                                        VkMemoryRequirements* pMemoryRequirements) {
     Device* dev = Device::fromHandle(device);
     Validator v(dev, "vkGetBufferMemoryRequirements");
+    if (!dev) return v.fail("VUID-vkGetBufferMemoryRequirements-device-parameter", "device is not a valid VkDevice.");
     if (v.enabled()) {
-        v.check(dev && dev->live<Buffer>(buffer, ObjectMagic::Buffer),
-                "VUID-vkGetBufferMemoryRequirements-buffer-parameter", "buffer is not a live VkBuffer.");
+        checkHandle<Buffer>(v, *dev, buffer, ObjectMagic::Buffer, "VUID-vkGetBufferMemoryRequirements-buffer-parameter",
+                            "VUID-vkGetBufferMemoryRequirements-buffer-parent", "buffer");
         v.check(pMemoryRequirements != nullptr, "VUID-vkGetBufferMemoryRequirements-pMemoryRequirements-parameter",
                 "pMemoryRequirements is NULL.");
         if (v.failed()) return;
@@ -72,7 +143,7 @@ VKAPI_ATTR void VKAPI_CALL GetBufferMemoryRequirements(VkDevice device, VkBuffer
 }
 
 VKAPI_ATTR VkResult VKAPI_CALL AllocateMemory(VkDevice device, const VkMemoryAllocateInfo* pAllocateInfo,
-                                              const VkAllocationCallbacks*, VkDeviceMemory* pMemory) {
+                                              const VkAllocationCallbacks* pAllocator, VkDeviceMemory* pMemory) {
     Device* dev = Device::fromHandle(device);
     Validator v(dev, "vkAllocateMemory");
     if (v.enabled()) {
@@ -87,6 +158,29 @@ VKAPI_ATTR VkResult VKAPI_CALL AllocateMemory(VkDevice device, const VkMemoryAll
                     pAllocateInfo->memoryTypeIndex);
             v.check(pAllocateInfo->allocationSize > 0, "VUID-VkMemoryAllocateInfo-allocationSize-07897",
                     "pAllocateInfo->allocationSize is 0.");
+            checkNextChain(v, pAllocateInfo->pNext, {VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_FLAGS_INFO},
+                           "VUID-VkMemoryAllocateInfo-pNext-pNext", "VUID-VkMemoryAllocateInfo-sType-unique",
+                           "pAllocateInfo");
+            if (const auto* f = allocateFlagsInfo(*pAllocateInfo)) {
+                constexpr VkMemoryAllocateFlags kKnown = VK_MEMORY_ALLOCATE_DEVICE_MASK_BIT |
+                                                         VK_MEMORY_ALLOCATE_DEVICE_ADDRESS_BIT |
+                                                         VK_MEMORY_ALLOCATE_DEVICE_ADDRESS_CAPTURE_REPLAY_BIT;
+                v.check((f->flags & ~kKnown) == 0, "VUID-VkMemoryAllocateFlagsInfo-flags-parameter",
+                        "VkMemoryAllocateFlagsInfo::flags 0x%x has unknown bits.", f->flags);
+                if (f->flags & VK_MEMORY_ALLOCATE_DEVICE_MASK_BIT) {
+                    // vkas is a device group of one physical device: the only valid mask is 1.
+                    v.check(f->deviceMask != 0, "VUID-VkMemoryAllocateFlagsInfo-deviceMask-00676",
+                            "VkMemoryAllocateFlagsInfo::deviceMask is 0.");
+                    v.check((f->deviceMask & ~1u) == 0, "VUID-VkMemoryAllocateFlagsInfo-deviceMask-00675",
+                            "VkMemoryAllocateFlagsInfo::deviceMask 0x%x names physical devices the device does not "
+                            "have (it has one).",
+                            f->deviceMask);
+                }
+                v.check(!(f->flags & VK_MEMORY_ALLOCATE_DEVICE_ADDRESS_CAPTURE_REPLAY_BIT),
+                        "VUID-VkMemoryAllocateInfo-flags-03330",
+                        "VkMemoryAllocateFlagsInfo::flags has DEVICE_ADDRESS_CAPTURE_REPLAY but the "
+                        "bufferDeviceAddressCaptureReplay feature is not enabled.");
+            }
         }
         v.check(pMemory != nullptr, "VUID-vkAllocateMemory-pMemory-parameter", "pMemory is NULL.");
         if (v.failed()) return VK_ERROR_VALIDATION_FAILED_EXT;
@@ -94,45 +188,48 @@ VKAPI_ATTR VkResult VKAPI_CALL AllocateMemory(VkDevice device, const VkMemoryAll
     VkDeviceSize size = pAllocateInfo->allocationSize;
     VkDeviceSize rounded = (size + kMemoryAlignment - 1) / kMemoryAlignment * kMemoryAlignment;
     if (rounded < size) return VK_ERROR_OUT_OF_HOST_MEMORY;
-    auto* memory = new (std::nothrow) Memory;
+    auto* memory = createObject<Memory>(pAllocator);
     if (!memory) return VK_ERROR_OUT_OF_HOST_MEMORY;
     memory->data = static_cast<std::byte*>(std::aligned_alloc(kMemoryAlignment, rounded));
-    if (!memory->data) {
-        delete memory;
-        return VK_ERROR_OUT_OF_HOST_MEMORY;
-    }
     memory->device = dev;
     memory->size = size;
-    dev->track(memory);
+    if (const auto* f = allocateFlagsInfo(*pAllocateInfo)) memory->allocateFlags = f->flags;
+    if (!memory->data || !dev->track(memory)) {
+        std::free(memory->data);
+        destroyObject(memory);
+        return VK_ERROR_OUT_OF_HOST_MEMORY;
+    }
     *pMemory = toHandle<VkDeviceMemory>(memory);
     return VK_SUCCESS;
 }
 
 VKAPI_ATTR void VKAPI_CALL FreeMemory(VkDevice device, VkDeviceMemory memory, const VkAllocationCallbacks*) {
     Device* dev = Device::fromHandle(device);
-    if (memory == VK_NULL_HANDLE) return;
     Validator v(dev, "vkFreeMemory");
-    if (v.enabled()) {
-        v.check(dev && dev->live<Memory>(memory, ObjectMagic::Memory), "VUID-vkFreeMemory-memory-parameter",
-                "memory is not a live VkDeviceMemory.");
-        if (v.failed()) return;
-    }
+    if (!dev) return v.fail("VUID-vkFreeMemory-device-parameter", "device is not a valid VkDevice.");
+    if (memory == VK_NULL_HANDLE) return;
+    if (v.enabled() && !checkHandle<Memory>(v, *dev, memory, ObjectMagic::Memory, "VUID-vkFreeMemory-memory-parameter",
+                                            "VUID-vkFreeMemory-memory-parent", "memory"))
+        return;
     auto* m = fromHandle<Memory>(memory);
     if (dev) dev->untrack(m);
     std::free(m->data);
-    m->magic = ObjectMagic::Dead;
-    delete m;
+    destroyObject(m);
 }
 
 VKAPI_ATTR VkResult VKAPI_CALL BindBufferMemory(VkDevice device, VkBuffer buffer, VkDeviceMemory memory,
                                                 VkDeviceSize memoryOffset) {
     Device* dev = Device::fromHandle(device);
     Validator v(dev, "vkBindBufferMemory");
-    Buffer* b = dev ? dev->live<Buffer>(buffer, ObjectMagic::Buffer) : nullptr;
-    Memory* m = dev ? dev->live<Memory>(memory, ObjectMagic::Memory) : nullptr;
+    if (!dev) {
+        v.fail("VUID-vkBindBufferMemory-device-parameter", "device is not a valid VkDevice.");
+        return VK_ERROR_VALIDATION_FAILED_EXT;
+    }
     if (v.enabled()) {
-        v.check(b != nullptr, "VUID-vkBindBufferMemory-buffer-parameter", "buffer is not a live VkBuffer.");
-        v.check(m != nullptr, "VUID-vkBindBufferMemory-memory-parameter", "memory is not a live VkDeviceMemory.");
+        Buffer* b = checkHandle<Buffer>(v, *dev, buffer, ObjectMagic::Buffer, "VUID-vkBindBufferMemory-buffer-parameter",
+                                        "VUID-vkBindBufferMemory-buffer-parent", "buffer");
+        Memory* m = checkHandle<Memory>(v, *dev, memory, ObjectMagic::Memory, "VUID-vkBindBufferMemory-memory-parameter",
+                                        "VUID-vkBindBufferMemory-memory-parent", "memory");
         if (b && m) {
             v.check(b->memory == nullptr, "VUID-vkBindBufferMemory-buffer-07459",
                     "buffer is already bound to memory.");
@@ -142,26 +239,38 @@ VKAPI_ATTR VkResult VKAPI_CALL BindBufferMemory(VkDevice device, VkBuffer buffer
             v.check(memoryOffset % kBufferAlignment == 0, "VUID-vkBindBufferMemory-memoryOffset-01036",
                     "memoryOffset %llu is not a multiple of the required alignment %llu.",
                     (unsigned long long)memoryOffset, (unsigned long long)kBufferAlignment);
-            v.check(memoryOffset < m->size && b->size <= m->size - memoryOffset,
-                    "VUID-vkBindBufferMemory-size-01037",
+            if (memoryOffset < m->size)
+                v.check(b->size <= m->size - memoryOffset, "VUID-vkBindBufferMemory-size-01037",
                     "the buffer's %llu bytes at memoryOffset %llu do not fit in the memory's %llu bytes.",
                     (unsigned long long)b->size, (unsigned long long)memoryOffset, (unsigned long long)m->size);
+            // bufferDeviceAddress is enabled: a buffer with SHADER_DEVICE_ADDRESS usage needs memory allocated with
+            // VK_MEMORY_ALLOCATE_DEVICE_ADDRESS_BIT (VkMemoryAllocateFlagsInfo).
+            if (b->usage & VK_BUFFER_USAGE_SHADER_DEVICE_ADDRESS_BIT)
+                v.check(m->allocateFlags & VK_MEMORY_ALLOCATE_DEVICE_ADDRESS_BIT,
+                        "VUID-vkBindBufferMemory-bufferDeviceAddress-03339",
+                        "buffer has SHADER_DEVICE_ADDRESS usage but memory was not allocated with "
+                        "VK_MEMORY_ALLOCATE_DEVICE_ADDRESS_BIT.");
         }
         if (v.failed()) return VK_ERROR_VALIDATION_FAILED_EXT;
     }
-    b = fromHandle<Buffer>(buffer);
+    Buffer* b = fromHandle<Buffer>(buffer);
     b->memory = fromHandle<Memory>(memory);
     b->memoryOffset = memoryOffset;
     return VK_SUCCESS;
 }
 
 VKAPI_ATTR VkResult VKAPI_CALL MapMemory(VkDevice device, VkDeviceMemory memory, VkDeviceSize offset,
-                                         VkDeviceSize size, VkMemoryMapFlags, void** ppData) {
+                                         VkDeviceSize size, VkMemoryMapFlags flags, void** ppData) {
     Device* dev = Device::fromHandle(device);
     Validator v(dev, "vkMapMemory");
-    Memory* m = dev ? dev->live<Memory>(memory, ObjectMagic::Memory) : nullptr;
+    if (!dev) {
+        v.fail("VUID-vkMapMemory-device-parameter", "device is not a valid VkDevice.");
+        return VK_ERROR_VALIDATION_FAILED_EXT;
+    }
     if (v.enabled()) {
-        if (v.check(m != nullptr, "VUID-vkMapMemory-memory-parameter", "memory is not a live VkDeviceMemory.")) {
+        v.check(flags == 0, "VUID-vkMapMemory-flags-zerobitmask", "flags is 0x%x.", flags);
+        if (Memory* m = checkHandle<Memory>(v, *dev, memory, ObjectMagic::Memory, "VUID-vkMapMemory-memory-parameter",
+                                            "VUID-vkMapMemory-memory-parent", "memory")) {
             v.check(!m->mapped, "VUID-vkMapMemory-memory-00678", "memory is already mapped.");
             v.check(offset < m->size, "VUID-vkMapMemory-offset-00679",
                     "offset %llu is not less than the memory size %llu.", (unsigned long long)offset,
@@ -174,7 +283,7 @@ VKAPI_ATTR VkResult VKAPI_CALL MapMemory(VkDevice device, VkDeviceMemory memory,
         v.check(ppData != nullptr, "VUID-vkMapMemory-ppData-parameter", "ppData is NULL.");
         if (v.failed()) return VK_ERROR_VALIDATION_FAILED_EXT;
     }
-    m = fromHandle<Memory>(memory);
+    Memory* m = fromHandle<Memory>(memory);
     m->mapped = true;
     *ppData = m->data + offset;
     return VK_SUCCESS;
@@ -183,9 +292,10 @@ VKAPI_ATTR VkResult VKAPI_CALL MapMemory(VkDevice device, VkDeviceMemory memory,
 VKAPI_ATTR void VKAPI_CALL UnmapMemory(VkDevice device, VkDeviceMemory memory) {
     Device* dev = Device::fromHandle(device);
     Validator v(dev, "vkUnmapMemory");
-    Memory* m = dev ? dev->live<Memory>(memory, ObjectMagic::Memory) : nullptr;
+    if (!dev) return v.fail("VUID-vkUnmapMemory-device-parameter", "device is not a valid VkDevice.");
     if (v.enabled()) {
-        if (v.check(m != nullptr, "VUID-vkUnmapMemory-memory-parameter", "memory is not a live VkDeviceMemory."))
+        if (Memory* m = checkHandle<Memory>(v, *dev, memory, ObjectMagic::Memory, "VUID-vkUnmapMemory-memory-parameter",
+                                            "VUID-vkUnmapMemory-memory-parent", "memory"))
             v.check(m->mapped, "VUID-vkUnmapMemory-memory-00689", "memory is not mapped.");
         if (v.failed()) return;
     }
@@ -195,19 +305,40 @@ VKAPI_ATTR void VKAPI_CALL UnmapMemory(VkDevice device, VkDeviceMemory memory) {
 VKAPI_ATTR VkDeviceAddress VKAPI_CALL GetBufferDeviceAddress(VkDevice device, const VkBufferDeviceAddressInfo* pInfo) {
     Device* dev = Device::fromHandle(device);
     Validator v(dev, "vkGetBufferDeviceAddress");
+    if (!dev) {
+        v.fail("VUID-vkGetBufferDeviceAddress-device-parameter", "device is not a valid VkDevice.");
+        return 0;
+    }
     if (v.enabled()) {
         if (v.check(pInfo != nullptr, "VUID-vkGetBufferDeviceAddress-pInfo-parameter", "pInfo is NULL.")) {
-            Buffer* b = dev ? dev->live<Buffer>(pInfo->buffer, ObjectMagic::Buffer) : nullptr;
-            if (v.check(b != nullptr, "VUID-VkBufferDeviceAddressInfo-buffer-parameter",
-                        "pInfo->buffer is not a live VkBuffer."))
+            v.check(pInfo->sType == VK_STRUCTURE_TYPE_BUFFER_DEVICE_ADDRESS_INFO,
+                    "VUID-VkBufferDeviceAddressInfo-sType-sType", "pInfo->sType is %d.", int(pInfo->sType));
+            v.check(pInfo->pNext == nullptr, "VUID-VkBufferDeviceAddressInfo-pNext-pNext", "pInfo->pNext is not NULL.");
+            if (Buffer* b = checkHandle<Buffer>(v, *dev, pInfo->buffer, ObjectMagic::Buffer,
+                                                "VUID-VkBufferDeviceAddressInfo-buffer-parameter", nullptr,
+                                                "pInfo->buffer")) {
                 v.check(b->memory != nullptr, "VUID-VkBufferDeviceAddressInfo-buffer-02600",
                         "pInfo->buffer is not bound to memory.");
+                v.check(b->usage & VK_BUFFER_USAGE_SHADER_DEVICE_ADDRESS_BIT,
+                        "VUID-VkBufferDeviceAddressInfo-buffer-02601",
+                        "pInfo->buffer was not created with VK_BUFFER_USAGE_SHADER_DEVICE_ADDRESS_BIT.");
+            }
         }
         if (v.failed()) return 0;
     }
     return reinterpret_cast<VkDeviceAddress>(fromHandle<Buffer>(pInfo->buffer)->hostAddress());
 }
 
-VKAPI_ATTR void VKAPI_CALL DestroyDevice(VkDevice device, const VkAllocationCallbacks*) { vkasDestroyDevice(device); }
+VKAPI_ATTR void VKAPI_CALL DestroyDevice(VkDevice device, const VkAllocationCallbacks* pAllocator) {
+    if (device == VK_NULL_HANDLE) return;
+    Device* dev = Device::fromHandle(device);
+    Validator v(dev, "vkDestroyDevice");
+    if (!dev) return v.fail("VUID-vkDestroyDevice-device-parameter", "device is not a valid VkDevice.");
+    // vkasCreateDevice takes no VkAllocationCallbacks.
+    if (v.enabled() && !v.check(pAllocator == nullptr, "VUID-vkDestroyDevice-device-00380",
+                                "pAllocator is not NULL but the device was created without VkAllocationCallbacks."))
+        return;
+    vkasDestroyDevice(device);
+}
 
 }  // namespace vkas::entry

@@ -25,6 +25,8 @@ struct Memory {
     std::byte* data = nullptr;
     VkDeviceSize size = 0;
     bool mapped = false;
+    VkMemoryAllocateFlags allocateFlags = 0;  // VkMemoryAllocateFlagsInfo::flags at allocation
+    VkAllocationCallbacks allocator{};  // the pAllocator of vkAllocateMemory (zero: none)
 };
 
 struct Buffer {
@@ -35,6 +37,7 @@ struct Buffer {
     VkBufferCreateFlags flags = 0;
     Memory* memory = nullptr;
     VkDeviceSize memoryOffset = 0;
+    VkAllocationCallbacks allocator{};  // the pAllocator of vkCreateBuffer (zero: none)
 
     std::byte* hostAddress() const { return memory ? memory->data + memoryOffset : nullptr; }
 };
@@ -48,6 +51,7 @@ struct AccelerationStructure {
     VkAccelerationStructureTypeKHR type = VK_ACCELERATION_STRUCTURE_TYPE_BOTTOM_LEVEL_KHR;
     VkAccelerationStructureCreateFlagsKHR createFlags = 0;
     bool constructed = false;  // a build or copy has written it
+    VkAllocationCallbacks allocator{};  // the pAllocator of vkCreateAccelerationStructureKHR (zero: none)
 
     // The structure's block: where its bytes live, or nullptr while its buffer has no memory.
     std::byte* block() const {

@@ -3,6 +3,7 @@
 
 #include "api/device.hpp"
 #include "api/entry_points.hpp"
+#include "api/guard.hpp"
 #include "api/limits.hpp"
 #include "engine/vertex_format.hpp"
 
@@ -13,7 +14,9 @@ struct ProcEntry {
     PFN_vkVoidFunction function;
 };
 
-#define VKAS_PROC(name, fn) {name, reinterpret_cast<PFN_vkVoidFunction>(&vkas::entry::fn)}
+// Every command runs through Guarded (api/guard.hpp): out of memory becomes VK_ERROR_OUT_OF_HOST_MEMORY, never an
+// exception.
+#define VKAS_PROC(name, fn) {name, reinterpret_cast<PFN_vkVoidFunction>(&vkas::Guarded<&vkas::entry::fn>::call)}
 const ProcEntry kProcs[] = {
     VKAS_PROC("vkCreateBuffer", CreateBuffer),
     VKAS_PROC("vkDestroyBuffer", DestroyBuffer),

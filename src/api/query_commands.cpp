@@ -1,4 +1,5 @@
 // vkWriteAccelerationStructuresPropertiesKHR and vkGetDeviceAccelerationStructureCompatibilityKHR.
+#include <cstdio>
 #include <cinttypes>
 #include <cstring>
 
@@ -105,12 +106,14 @@ VKAPI_ATTR VkResult VKAPI_CALL WriteAccelerationStructuresPropertiesKHR(
                 "dataSize %zu is less than accelerationStructureCount %u * stride %zu.", dataSize,
                 accelerationStructureCount, stride);
         for (uint32_t i = 0; pAccelerationStructures && i < accelerationStructureCount; ++i) {
-            const auto* as = dev->live<AccelerationStructure>(pAccelerationStructures[i],
-                                                              ObjectMagic::AccelerationStructure);
-            if (!v.check(as != nullptr, "VUID-vkWriteAccelerationStructuresPropertiesKHR-pAccelerationStructures-parameter",
-                         "pAccelerationStructures[%u] is not a live VkAccelerationStructureKHR.", i))
-                continue;
-            if (!v.check(as->buffer->memory != nullptr, "VUID-vkWriteAccelerationStructuresPropertiesKHR-buffer-03733",
+            char name[48];
+            std::snprintf(name, sizeof name, "pAccelerationStructures[%u]", i);
+            const auto* as = checkHandle<AccelerationStructure>(
+                v, *dev, pAccelerationStructures[i], ObjectMagic::AccelerationStructure,
+                "VUID-vkWriteAccelerationStructuresPropertiesKHR-pAccelerationStructures-parameter",
+                "VUID-vkWriteAccelerationStructuresPropertiesKHR-pAccelerationStructures-parent", name);
+            if (!as) continue;
+            if (!v.check(as->buffer->memory != nullptr, "VUID-vkWriteAccelerationStructuresPropertiesKHR-buffer-03736",
                          "the buffer of pAccelerationStructures[%u] is not bound to memory.", i))
                 continue;
             const std::byte* block = constructedBlock(*as);

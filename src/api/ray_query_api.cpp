@@ -19,7 +19,30 @@ using vkas::RayQueryState;
 struct QueryObject {
     RayQueryState engine;
     const vkas::Device* device;  // of the top-level structure given to Initialize; null for a null one
+    bool motion;                 // that structure was built with VK_BUILD_ACCELERATION_STRUCTURE_MOTION_BIT_NV
 };
+
+// The live acceleration structure `handle` names (looked up before it is dereferenced), or nullptr.
+const vkas::AccelerationStructure* liveStructure(VkAccelerationStructureKHR handle) {
+    if (!vkas::Device::ownerOf(handle)) return nullptr;
+    auto* as = vkas::fromHandle<vkas::AccelerationStructure>(handle);
+    return as->magic == vkas::ObjectMagic::AccelerationStructure ? as : nullptr;
+}
+
+// Reports a topLevel handle that names no live acceleration structure (VUID-...-06352: the operand must be a
+// top-level acceleration structure). Returns false then.
+bool checkTopLevelHandle(vkas::Validator& v, VkAccelerationStructureKHR topLevel,
+                         const vkas::AccelerationStructure* tlas) {
+    return v.check(topLevel == VK_NULL_HANDLE || tlas != nullptr, "VUID-RuntimeSpirv-OpRayQueryInitializeKHR-06352",
+                   "topLevel (0x%llx) is not a live VkAccelerationStructureKHR.",
+                   static_cast<unsigned long long>(reinterpret_cast<uintptr_t>(topLevel)));
+}
+
+bool builtWithMotion(const vkas::AccelerationStructure* as) {
+    const std::byte* block = as ? as->block() : nullptr;
+    return block && vkas::format::header(block)->magic == vkas::format::kMagic &&
+           (vkas::format::header(block)->buildFlags & VK_BUILD_ACCELERATION_STRUCTURE_MOTION_BIT_NV);
+}
 static_assert(sizeof(QueryObject) <= VKAS_RAY_QUERY_SIZE, "VKAS_RAY_QUERY_SIZE is too small");
 static_assert(alignof(QueryObject) <= 16);
 
@@ -54,7 +77,7 @@ bool validateRay(Validator& v, const AccelerationStructure* tlas, uint32_t rayFl
                   "%sthe ray direction (%g, %g, %g) is not finite.", where, direction[0], direction[1], direction[2]);
     ok &= v.check(!std::isnan(tMin) && !std::isnan(tMax), "VUID-RuntimeSpirv-OpRayQueryInitializeKHR-06351",
                   "%sRayTmin %g or RayTmax %g is NaN.", where, tMin, tMax);
-    ok &= v.check(tMin >= 0.0f && tMax >= 0.0f, "VUID-RuntimeSpirv-OpRayQueryInitializeKHR-06349",
+    ok &= v.check(!(tMin < 0.0f) && !(tMax < 0.0f), "VUID-RuntimeSpirv-OpRayQueryInitializeKHR-06349",
                   "%sRayTmin %g and RayTmax %g must be non-negative.", where, tMin, tMax);
     ok &= v.check(!(tMin > tMax), "VUID-RuntimeSpirv-OpRayQueryInitializeKHR-06350",
                   "%sRayTmin %g is greater than RayTmax %g.", where, tMin, tMax);
@@ -64,6 +87,11 @@ bool validateRay(Validator& v, const AccelerationStructure* tlas, uint32_t rayFl
     ok &= v.check(atMostOneBit(rayFlags & kTriangleGroup), "VUID-RuntimeSpirv-OpRayQueryInitializeKHR-06890",
                   "%sRayFlags 0x%x has more than one of SkipTriangles, CullBackFacing and CullFrontFacing.", where,
                   rayFlags);
+    // ForceOpacityMicromap2StateEXT (0x400) needs the RayTracingOpacityMicromapKHR capability, which vkas lacks.
+    ok &= v.check(!(rayFlags & 0x400u), "VUID-RuntimeSpirv-RayTracingOpacityMicromapKHR-11542",
+                  "%sRayFlags 0x%x has ForceOpacityMicromap2State, which needs the RayTracingOpacityMicromapKHR "
+                  "capability.",
+                  where, rayFlags);
     ok &= v.check(!((rayFlags & VKAS_RAY_FLAG_SKIP_TRIANGLES) && (rayFlags & VKAS_RAY_FLAG_SKIP_AABBS)),
                   "VUID-RuntimeSpirv-OpRayQueryInitializeKHR-06889",
                   "%sRayFlags 0x%x has both SkipTriangles and SkipAABBs.", where, rayFlags);
@@ -84,17 +112,19 @@ extern "C" {
 VKAS_API void vkasRayQueryInitialize(VkasRayQuery* q, VkAccelerationStructureKHR topLevel, uint32_t rayFlags,
                                      uint32_t cullMask, const float origin[3], float tMin, const float direction[3],
                                      float tMax) {
-    auto* tlas = vkas::fromHandle<vkas::AccelerationStructure>(topLevel);
-    if (tlas && tlas->magic != vkas::ObjectMagic::AccelerationStructure) tlas = nullptr;
+    const vkas::AccelerationStructure* tlas = liveStructure(topLevel);
     vkas::Validator v(tlas ? tlas->device : nullptr, "vkasRayQueryInitialize");
     bool valid = true;
-    if (v.enabled()) valid = vkas::validateRay(v, tlas, rayFlags, origin, tMin, direction, tMax, "");
+    if (v.enabled())
+        valid = checkTopLevelHandle(v, topLevel, tlas) &&
+                vkas::validateRay(v, tlas, rayFlags, origin, tMin, direction, tMax, "");
     const std::byte* block = (tlas && valid) ? tlas->block() : nullptr;
     // An invalid ray traverses nothing: the query behaves as for a null acceleration structure.
     static const float zero[3] = {0, 0, 0};
     vkas::queryInitialize(state(q), block, vkas::resolveAccelerationStructure, rayFlags, cullMask,
                           valid ? origin : zero, valid ? tMin : 0.0f, valid ? direction : zero, valid ? tMax : 0.0f);
     object(q).device = tlas ? tlas->device : nullptr;
+    object(q).motion = builtWithMotion(tlas);
 }
 
 // [NV-motion] vkasRayQueryInitialize with a ray time. The time rule is the one of OpTraceRayMotionNV (SPIR-V has
@@ -103,12 +133,12 @@ VKAS_API void vkasRayQueryInitialize(VkasRayQuery* q, VkAccelerationStructureKHR
 VKAS_API void vkasRayQueryInitializeMotion(VkasRayQuery* q, VkAccelerationStructureKHR topLevel, uint32_t rayFlags,
                                            uint32_t cullMask, const float origin[3], float tMin,
                                            const float direction[3], float tMax, float time) {
-    auto* tlas = vkas::fromHandle<vkas::AccelerationStructure>(topLevel);
-    if (tlas && tlas->magic != vkas::ObjectMagic::AccelerationStructure) tlas = nullptr;
+    const vkas::AccelerationStructure* tlas = liveStructure(topLevel);
     vkas::Validator v(tlas ? tlas->device : nullptr, "vkasRayQueryInitializeMotion");
     bool valid = true;
     if (v.enabled()) {
-        valid = vkas::validateRay(v, tlas, rayFlags, origin, tMin, direction, tMax, "");
+        valid = checkTopLevelHandle(v, topLevel, tlas) &&
+                vkas::validateRay(v, tlas, rayFlags, origin, tMin, direction, tMax, "");
         valid &= v.check(time >= 0.0f && time <= 1.0f, "VUID-RuntimeSpirv-OpTraceRayMotionNV-06366",
                          "the ray time %g is not between 0.0 and 1.0.", double(time));
     } else if (!(time >= 0.0f && time <= 1.0f)) {
@@ -120,6 +150,7 @@ VKAS_API void vkasRayQueryInitializeMotion(VkasRayQuery* q, VkAccelerationStruct
                           valid ? origin : zero, valid ? tMin : 0.0f, valid ? direction : zero, valid ? tMax : 0.0f,
                           valid ? time : 0.0f);
     object(q).device = tlas ? tlas->device : nullptr;
+    object(q).motion = builtWithMotion(tlas);
 }
 
 VKAS_API VkBool32 vkasRayQueryProceed(VkasRayQuery* q) { return vkas::queryProceed(state(q)) ? VK_TRUE : VK_FALSE; }
@@ -130,10 +161,16 @@ VKAS_API void vkasRayQueryGenerateIntersection(VkasRayQuery* q, float tHit) {
     if (s.candidatePending && s.candidate.type == vkas::kCandidateAabb) {
         vkas::Validator v(object(q).device, "vkasRayQueryGenerateIntersection");
         // s.tMax is the committed hit's t, or RayTmax while there is none: the bound 06353 names.
-        if (v.enabled())
+        if (v.enabled()) {
+            // A motion structure takes no generated intersections: the instruction has no effect.
+            if (!v.check(!object(q).motion, "VUID-RuntimeSpirv-OpRayQueryGenerateIntersectionKHR-06354",
+                         "the ray query traverses a structure built with VK_BUILD_ACCELERATION_STRUCTURE_MOTION_BIT_NV; "
+                         "the intersection is not generated."))
+                return;
             v.check(tHit >= s.tMin && tHit <= s.tMax, "VUID-RuntimeSpirv-OpRayQueryGenerateIntersectionKHR-06353",
                     "Hit T %g is outside [RayTmin %g, committed T %g]; the intersection is not generated.",
                     double(tHit), double(s.tMin), double(s.tMax));
+        }
     }
     vkas::queryGenerate(state(q), tHit);  // ignores a Hit T outside that range
 }
@@ -206,6 +243,19 @@ VKAS_API void vkasRayQueryGetIntersectionWorldToObject(const VkasRayQuery* q, Vk
 VKAS_API void vkasRayQueryGetIntersectionTriangleVertexPositions(const VkasRayQuery* q, VkBool32 committed,
                                                                  float out[3][3]) {
     const QueryHit& h = hit(q, committed);  // AABB candidates and generated hits have no triangle: zeros
+    if (h.triangle && h.instance) {
+        // Positions are kept for every build, but the rule asks for ALLOW_DATA_ACCESS on the hit's structure.
+        const std::byte* blas = vkas::resolveAccelerationStructure(h.instance->reference);
+        const auto* query = reinterpret_cast<const QueryObject*>(q->opaque);
+        vkas::Validator v(query->device, "vkasRayQueryGetIntersectionTriangleVertexPositions");
+        if (v.enabled() && blas &&
+            !v.check(vkas::format::header(blas)->buildFlags & VK_BUILD_ACCELERATION_STRUCTURE_ALLOW_DATA_ACCESS_KHR,
+                     "VUID-RuntimeSpirv-flags-08761",
+                     "the %s intersection's bottom-level structure was not built with "
+                     "VK_BUILD_ACCELERATION_STRUCTURE_ALLOW_DATA_ACCESS_KHR.",
+                     committed ? "committed" : "candidate"))
+            return;
+    }
     if (h.triangle && (h.triangle->flags & vkas::format::kTriangleMotion)) {
         // [NV-motion] The positions at the ray time: the triangle that was intersected.
         const auto* rec = reinterpret_cast<const vkas::format::MotionTriangleRecord*>(h.triangle);

@@ -14,7 +14,6 @@ using ull = unsigned long long;
 // VUID names of the two structures, which carry the same rules under different numbers.
 struct Vuids {
     const char* structName;
-    const char* sType;
     const char* vertexStride;     // multiple of the component (packed: format) size
     const char* strides;          // vertexStride and radiusStride <= 2^32-1
     const char* vertexFormat;     // AS vertex buffer format feature
@@ -29,7 +28,6 @@ struct Vuids {
 
 const Vuids kSphereVuids = {
     "VkAccelerationStructureGeometrySpheresDataNV",
-    "VUID-VkAccelerationStructureGeometrySpheresDataNV-sType-sType",
     "VUID-VkAccelerationStructureGeometrySpheresDataNV-vertexStride-10431",
     "VUID-VkAccelerationStructureGeometrySpheresDataNV-vertexStride-10432",
     "VUID-VkAccelerationStructureGeometrySpheresDataNV-vertexFormat-10434",
@@ -43,7 +41,6 @@ const Vuids kSphereVuids = {
 };
 const Vuids kLssVuids = {
     "VkAccelerationStructureGeometryLinearSweptSpheresDataNV",
-    "VUID-VkAccelerationStructureGeometryLinearSweptSpheresDataNV-sType-sType",
     "VUID-VkAccelerationStructureGeometryLinearSweptSpheresDataNV-vertexStride-10421",
     "VUID-VkAccelerationStructureGeometryLinearSweptSpheresDataNV-vertexStride-10422",
     "VUID-VkAccelerationStructureGeometryLinearSweptSpheresDataNV-vertexFormat-10423",

@@ -1,12 +1,23 @@
 #include "api/thread_pool.hpp"
 
+#include <exception>
+#include <utility>
+
 namespace vkas {
 
 ThreadPool::ThreadPool(uint32_t threadCount) {
-    for (uint32_t i = 1; i < threadCount; ++i) workers_.emplace_back([this] { workerLoop(); });
+    try {
+        workers_.reserve(threadCount > 1 ? threadCount - 1 : 0);
+        for (uint32_t i = 1; i < threadCount; ++i) workers_.emplace_back([this] { workerLoop(); });
+    } catch (...) {
+        stopAndJoin();  // a thread that could not start (out of memory): the started ones end, then it throws
+        throw;
+    }
 }
 
-ThreadPool::~ThreadPool() {
+ThreadPool::~ThreadPool() { stopAndJoin(); }
+
+void ThreadPool::stopAndJoin() {
     {
         std::lock_guard lock(mutex_);
         stop_ = true;
@@ -19,7 +30,13 @@ void ThreadPool::runTasks() {
     for (;;) {
         uint64_t i = next_.fetch_add(1);
         if (i >= count_.load()) break;
-        (*task_.load())(i);
+        try {
+            (*task_.load())(i);
+        } catch (...) {  // out of memory in a task: the first error is rethrown by parallelFor; the rest is skipped
+            std::lock_guard lock(mutex_);
+            if (!error_) error_ = std::current_exception();
+            next_.store(~uint64_t(0) >> 1);
+        }
     }
 }
 
@@ -51,6 +68,7 @@ void ThreadPool::parallelFor(uint64_t count, const std::function<void(uint64_t)>
     {
         std::lock_guard lock(mutex_);
         next_.store(~uint64_t(0) >> 1);  // a late worker of the last call claims nothing
+        error_ = nullptr;
         task_.store(&task);
         count_.store(count);
         next_.store(0);
@@ -60,6 +78,10 @@ void ThreadPool::parallelFor(uint64_t count, const std::function<void(uint64_t)>
     runTasks();
     std::unique_lock lock(mutex_);
     finished_.wait(lock, [&] { return busy_ == 0; });
+    if (std::exception_ptr error = std::exchange(error_, nullptr)) {
+        lock.unlock();
+        std::rethrow_exception(error);
+    }
 }
 
 }  // namespace vkas

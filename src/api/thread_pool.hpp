@@ -4,6 +4,7 @@
 #include <atomic>
 #include <condition_variable>
 #include <cstdint>
+#include <exception>
 #include <functional>
 #include <mutex>
 #include <thread>
@@ -20,12 +21,14 @@ public:
 
     uint32_t threadCount() const { return uint32_t(workers_.size()) + 1; }
     // Calls task(i) for every i in [0, count) on the workers and the calling thread; returns when all are done.
-    // One parallelFor runs at a time; concurrent callers wait their turn.
+    // One parallelFor runs at a time; concurrent callers wait their turn. When a task throws (out of memory), the
+    // tasks not started yet are skipped and parallelFor rethrows the first exception once every thread is done.
     void parallelFor(uint64_t count, const std::function<void(uint64_t)>& task);
 
 private:
     void workerLoop();
     void runTasks();
+    void stopAndJoin();
 
     std::vector<std::thread> workers_;
     std::mutex callMutex_;  // serialises parallelFor calls
@@ -37,6 +40,7 @@ private:
     uint32_t busy_ = 0;
     uint64_t generation_ = 0;
     bool stop_ = false;
+    std::exception_ptr error_;  // the first exception a task of the current call threw
 };
 
 }  // namespace vkas

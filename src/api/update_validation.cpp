@@ -1,5 +1,7 @@
 #include "api/update_validation.hpp"
 
+#include <cstdio>
+
 #include <algorithm>
 
 #include "engine/as_build.hpp"
@@ -32,11 +34,13 @@ const std::byte* checkUpdateSource(Validator& v, const Device& dev, const VkAcce
     if (!v.check(info.srcAccelerationStructure != VK_NULL_HANDLE, "VUID-vkBuildAccelerationStructuresKHR-pInfos-04630",
                  "%s.mode is UPDATE but srcAccelerationStructure is VK_NULL_HANDLE.", where))
         return nullptr;
-    const auto* src =
-        dev.live<AccelerationStructure>(info.srcAccelerationStructure, ObjectMagic::AccelerationStructure);
-    if (!v.check(src != nullptr, "VUID-vkBuildAccelerationStructuresKHR-srcAccelerationStructure-04629",
-                 "%s.srcAccelerationStructure is not a live VkAccelerationStructureKHR.", where))
-        return nullptr;
+    char name[64];
+    std::snprintf(name, sizeof name, "%s.srcAccelerationStructure", where);
+    const auto* src = checkHandle<AccelerationStructure>(
+        v, dev, info.srcAccelerationStructure, ObjectMagic::AccelerationStructure,
+        "VUID-vkBuildAccelerationStructuresKHR-srcAccelerationStructure-04629",
+        "VUID-VkAccelerationStructureBuildGeometryInfoKHR-commonparent", name);
+    if (!src) return nullptr;
     if (!v.check(src->buffer->memory != nullptr, "VUID-vkBuildAccelerationStructuresKHR-pInfos-03708",
                  "%s.srcAccelerationStructure's buffer is not bound to memory.", where))
         return nullptr;
@@ -82,7 +86,7 @@ const std::byte* checkUpdateSource(Validator& v, const Device& dev, const VkAcce
                 "%s geometry %u: flags is 0x%x but it was 0x%x in the last build of srcAccelerationStructure.", where, g,
                 geom->flags, d.flags);
         if (ranges)
-            v.check(ranges[g].primitiveCount == d.primitiveCount, "VUID-vkBuildAccelerationStructuresKHR-pInfos-03769",
+            v.check(ranges[g].primitiveCount == d.primitiveCount, "VUID-vkBuildAccelerationStructuresKHR-primitiveCount-03769",
                     "%s geometry %u: primitiveCount is %u but it was %u in the last build of srcAccelerationStructure.",
                     where, g, ranges[g].primitiveCount, d.primitiveCount);
         if (geom->geometryType != VK_GEOMETRY_TYPE_TRIANGLES_KHR) continue;

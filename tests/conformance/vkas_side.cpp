@@ -51,7 +51,10 @@ struct VkasSide::Impl {
         check(vk.vkCreateBuffer(device, &bci, nullptr, &a.buffer), "vkCreateBuffer");
         VkMemoryRequirements req;
         vk.vkGetBufferMemoryRequirements(device, a.buffer, &req);
-        VkMemoryAllocateInfo mai{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
+        // SHADER_DEVICE_ADDRESS buffers need memory allocated with DEVICE_ADDRESS (VUID-vkBindBufferMemory-bufferDeviceAddress-03339).
+        VkMemoryAllocateFlagsInfo flagsInfo{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_FLAGS_INFO};
+        flagsInfo.flags = VK_MEMORY_ALLOCATE_DEVICE_ADDRESS_BIT;
+        VkMemoryAllocateInfo mai{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO, &flagsInfo};
         mai.allocationSize = req.size;
         mai.memoryTypeIndex = 0;
         check(vk.vkAllocateMemory(device, &mai, nullptr, &a.memory), "vkAllocateMemory");

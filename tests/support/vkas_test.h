@@ -211,6 +211,11 @@ class VkasTest : public ::testing::Test {
 
     // Validation: the test fails in TearDown if an error was reported, unless consumed with takeValidationErrors.
     std::vector<std::string> takeValidationErrors();
+    // Objects a test leaves behind are freed by vkasDestroyDevice, which reports them (05137); set this to accept
+    // that report instead of failing.
+    bool ignoreLeaksAtTeardown = false;
+    // Every buffer this fixture created (the valid-usage tests compare their memory before and after a command).
+    std::vector<HostBuffer*> allBuffers();
 
     HostBuffer* createBuffer(VkDeviceSize size, VkBufferUsageFlags usage = kAsBufferUsage, bool bind = true,
                              uint8_t poison = 0xAA);

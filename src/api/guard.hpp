@@ -1,0 +1,110 @@
+// Exception safety at the API boundary: no C++ exception ever leaves vkas. A failing allocation (std::bad_alloc, or
+// std::length_error from a container sized by input) becomes VK_ERROR_OUT_OF_HOST_MEMORY; anything else (an
+// exception thrown by an application callback, a thread that could not start) VK_ERROR_UNKNOWN. Every command of the
+// proc table and every exported function that may allocate runs through guarded(); work run on joined or worker
+// threads catches with the same mapping (deferred_operation.cpp, thread_pool.cpp).
+#pragma once
+
+#include <vulkan/vulkan_core.h>
+
+#include <cstring>
+#include <exception>
+#include <new>
+#include <stdexcept>
+#include <type_traits>
+
+#include "api/objects.hpp"
+#include "engine/format.hpp"
+
+namespace vkas {
+
+// The VkResult for the exception being handled; call inside a catch block only.
+inline VkResult currentExceptionResult() noexcept {
+    try {
+        throw;
+    } catch (const std::bad_alloc&) {
+        return VK_ERROR_OUT_OF_HOST_MEMORY;
+    } catch (const std::length_error&) {
+        return VK_ERROR_OUT_OF_HOST_MEMORY;
+    } catch (...) {
+        return VK_ERROR_UNKNOWN;
+    }
+}
+
+// What a command returns when it failed with an exception: the VkResult above, nothing for void commands, 0 for a
+// VkDeviceAddress, a count or a VkBool32.
+template <class R>
+R failureValue(VkResult result) noexcept {
+    if constexpr (std::is_same_v<R, VkResult>)
+        return result;
+    else if constexpr (!std::is_void_v<R>)
+        return R{};
+}
+
+// Runs fn() and returns its result, or failureValue() when it throws.
+template <class Fn>
+auto guarded(Fn&& fn) noexcept -> decltype(fn()) {
+    using R = decltype(fn());
+    try {
+        return fn();
+    } catch (...) {
+        return failureValue<R>(currentExceptionResult());
+    }
+}
+
+// Guarded<&F>::call has F's exact signature and runs F through guarded(): the proc table hands these out.
+template <auto F>
+struct Guarded;
+template <class R, class... A, R(VKAPI_PTR* F)(A...)>
+struct Guarded<F> {
+    static VKAPI_ATTR R VKAPI_CALL call(A... args) noexcept {
+        return guarded([&]() -> R { return F(args...); });
+    }
+};
+
+// A build, copy or deserialization that failed part-way leaves its destination unconstructed: the header no longer
+// names a structure, so nothing (instances referring to it, copies, traversal) reads the half-written contents.
+inline void markUnconstructed(AccelerationStructure& as) noexcept {
+    as.constructed = false;
+    if (std::byte* block = as.block(); block && as.size >= sizeof(format::Header))
+        std::memset(block + offsetof(format::Header, magic), 0, sizeof(format::Header::magic));
+}
+
+// The object's own host allocation, through the application's VkAllocationCallbacks when it gives them (scope
+// OBJECT; kept in the object so that it is freed through the same callbacks, by vkDestroy* or vkasDestroyDevice).
+// Returns nullptr when the allocation fails (VK_ERROR_OUT_OF_HOST_MEMORY).
+template <class T>
+T* createObject(const VkAllocationCallbacks* allocator) {
+    void* p = nullptr;
+    if (allocator && allocator->pfnAllocation)
+        p = allocator->pfnAllocation(allocator->pUserData, sizeof(T), alignof(T), VK_SYSTEM_ALLOCATION_SCOPE_OBJECT);
+    else
+        p = ::operator new(sizeof(T), std::nothrow);
+    if (!p) return nullptr;
+    T* object;
+    try {
+        object = new (p) T;
+    } catch (...) {
+        if (allocator && allocator->pfnAllocation)
+            allocator->pfnFree(allocator->pUserData, p);
+        else
+            ::operator delete(p);
+        throw;
+    }
+    if (allocator && allocator->pfnAllocation) object->allocator = *allocator;
+    return object;
+}
+
+template <class T>
+void destroyObject(T* object) noexcept {
+    if (!object) return;
+    const VkAllocationCallbacks allocator = object->allocator;
+    object->magic = ObjectMagic::Dead;
+    object->~T();
+    if (allocator.pfnFree)
+        allocator.pfnFree(allocator.pUserData, object);
+    else
+        ::operator delete(object);
+}
+
+}  // namespace vkas
