@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # The README's second command (and CI's, through .ci/run): installs the build dependencies, then
 #   1. builds RelWithDebInfo in build/ and runs the test suite (ctest) and a smoke run of the vkas tool;
-#   2. builds with AddressSanitizer + UndefinedBehaviorSanitizer in build-asan/ and runs the same there;
+#   2. builds with AddressSanitizer + UndefinedBehaviorSanitizer in build-asan/ (with Clang, and the libFuzzer targets)
+#      and runs the same there, then runs each fuzz target for a bounded time (scripts/run-fuzzers.sh);
 #   (between the two: installs Mesa's lavapipe from bookworm-backports for the differential-conformance tests)
 #   3. installs build/ into a temporary prefix and builds the C package consumer against it
 #      (find_package(vkas) and pkg-config vkas).
@@ -91,15 +92,31 @@ else
   record "build" 1
 fi
 
-banner "build-asan/ (AddressSanitizer + UndefinedBehaviorSanitizer)"
+banner "build-asan/ (AddressSanitizer + UndefinedBehaviorSanitizer, Clang, libFuzzer targets)"
 export ASAN_OPTIONS=${ASAN_OPTIONS:-halt_on_error=1:detect_leaks=1:detect_stack_use_after_return=1:strict_string_checks=1}
 export UBSAN_OPTIONS=${UBSAN_OPTIONS:-halt_on_error=1:print_stacktrace=1}
-if cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DVKAS_BUILD_TESTS=ON -DVKAS_BUILD_TOOLS=ON \
-     -DVKAS_SANITIZE=ON && cmake --build build-asan -j"$jobs"; then
+# Clang builds the sanitizer build so that the same library objects serve the tests and the fuzz targets
+# (fuzz/CMakeLists.txt). A build-asan/ configured with another compiler is configured afresh.
+asan_compiler=(-DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ -DVKAS_BUILD_FUZZERS=ON)
+asan_fresh=()
+if [[ -f build-asan/CMakeCache.txt ]] &&
+   ! grep -Eq '^CMAKE_CXX_COMPILER:[A-Z]+=.*clang\+\+$' build-asan/CMakeCache.txt; then
+  asan_fresh=(--fresh)
+fi
+if cmake "${asan_fresh[@]}" -S . -B build-asan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DVKAS_BUILD_TESTS=ON \
+     -DVKAS_BUILD_TOOLS=ON -DVKAS_SANITIZE=ON "${asan_compiler[@]}" && cmake --build build-asan -j"$jobs"; then
   record "asan build" 0
   banner "ctest in build-asan/"
   ctest_in build-asan "asan tests"
   tool_smoke build-asan "asan tool"
+  banner "fuzz targets in build-asan/ (scripts/run-fuzzers.sh, ${VKAS_FUZZ_SECONDS:-45}s each)"
+  fuzz_start=$SECONDS
+  "$root/scripts/run-fuzzers.sh" build-asan "${VKAS_FUZZ_SECONDS:-45}" 2>&1 | tee "$logdir/fuzz.log"
+  fuzz_status=${PIPESTATUS[0]}
+  fuzz_detail=$(grep -E '^fuzz: ' "$logdir/fuzz.log" | tail -1)
+  fuzz_detail=${fuzz_detail#fuzz: }
+  fuzz_detail=${fuzz_detail#FAILED: }
+  record "fuzz" "$fuzz_status" "${fuzz_detail:-no summary}; $((SECONDS - fuzz_start))s"
 else
   record "asan build" 1
 fi

@@ -3,8 +3,9 @@
 # Usage: scripts/setup-deps.sh [extra-package ...]
 set -euo pipefail
 
+# clang + libclang-rt-14-dev (libFuzzer, the sanitizer runtimes): the sanitizer build and its fuzz targets.
 packages=(build-essential cmake pkg-config libvulkan-dev libgtest-dev libgmock-dev libcli11-dev libpng-dev
-          glslang-tools "$@")
+          glslang-tools clang libclang-rt-14-dev "$@")
 
 missing=()
 for p in "${packages[@]}"; do

@@ -7,6 +7,7 @@
 #include <cstddef>
 #include <cstring>
 #include <iostream>
+#include <limits>
 
 #include "meshes.h"
 
@@ -198,4 +199,36 @@ TEST_F(build_provisional, offset_info_name) {
     AccelStruct* blas = buildBlas({g->geometry}, offsetInfos);
     AccelStruct* tlas = buildSingleInstanceTlas(blas);
     EXPECT_GT(checkRays(tlas, randomRays(*tlas->scene, 300)), 0u);
+}
+
+// Vertices with infinite coordinates are valid input (no VUID restricts vertex values). Their bounds have NaN
+// surface areas, which once left the builder unable to split a node: it recursed without end (more than a leaf of
+// such triangles), or wrote more nodes than the size query allows (past the structure, into the canary submit()
+// checks). Found by the build fuzzer (docs/FUZZING.md). The finite triangles must still be hit.
+class build_nonfinite : public VkasTest {};
+
+TEST_F(build_nonfinite, infinite_vertex_coordinates) {
+    constexpr float kInf = std::numeric_limits<float>::infinity();
+    for (int infinite : {5, 37}) {
+        for (int nx : {0, 12}) {
+            SCOPED_TRACE(testing::Message() << infinite << " infinite triangles, a grid of " << nx << " x 10 quads");
+            Mesh mesh = nx ? grid(nx, 10) : Mesh{};
+            for (int i = 0; i < infinite; ++i) {
+                const uint32_t base = uint32_t(mesh.positions.size());
+                for (int j = 0; j < 3; ++j) mesh.positions.push_back({float(3 * i + j), kInf, 1.0f});
+                mesh.indices.insert(mesh.indices.end(), {base, base + 1, base + 2});
+            }
+            auto geometry = makeGeometry(mesh, VK_INDEX_TYPE_UINT32);
+            BuildOptions opt;
+            opt.flags = nx ? VK_BUILD_ACCELERATION_STRUCTURE_PREFER_FAST_BUILD_BIT_KHR : 0;
+            const AccelStruct* blas = buildBlas(*geometry, opt);  // checks the canary after the structure
+            const AccelStruct* tlas = buildSingleInstanceTlas(blas);
+            for (int k = 0; nx && k < 50; ++k) {
+                const GridTarget target = gridTarget(rng, nx, 10);
+                const Hit hit = traceClosest(tlas, target.ray);
+                ASSERT_EQ(hit.type, uint32_t(VKAS_COMMITTED_INTERSECTION_TRIANGLE)) << describe(target.ray);
+                EXPECT_EQ(hit.primitiveIndex, 2 * target.quad + target.upper) << describe(target.ray);
+            }
+        }
+    }
 }

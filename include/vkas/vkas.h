@@ -190,6 +190,8 @@ typedef struct VkasHit {
 typedef enum VkasTraceMode {
     VKAS_TRACE_MODE_CLOSEST_HIT = 0, /* the committed hit after full traversal */
     VKAS_TRACE_MODE_ANY_HIT = 1,     /* traversal ends at the first hit (adds TERMINATE_ON_FIRST_HIT): shadow rays */
+    VKAS_TRACE_MODE_MAX_ENUM = 0x7FFFFFFF /* as in Vulkan: the enum holds any 32-bit value, so invalid ones are
+                                             reported (VUID-vkasTraceRays-mode-parameter) rather than undefined */
 } VkasTraceMode;
 
 /*

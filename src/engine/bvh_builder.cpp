@@ -70,6 +70,11 @@ public:
                     best = int(i);
                 }
             }
+            // A child of more than a leaf splits even when its area is NaN (infinite coordinates): every node keeps
+            // 8 children or only leaves (the node bound of the build sizes, docs/FORMAT.md), and a node never has
+            // its own range as its only child (which would recurse forever).
+            for (uint32_t i = 0; i < n && best < 0; ++i)
+                if (children[i].count() > settings_.maxLeafSize) best = int(i);
             if (best < 0) break;
             Range left, right;
             split(children[best], left, right);

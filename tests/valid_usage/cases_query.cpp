@@ -80,8 +80,15 @@ VkasRay downRay(float tMin = 0.0f, float tMax = 10.0f) {
 
 // A built bottom level of the fixture's two boxes.
 vt::AccelStruct* boxBlas(Fixture& t) {
-    auto pb = t.aabbBuild();
-    return t.buildBlas(pb->geometries, pb->ranges);
+    VkAccelerationStructureGeometryKHR g{VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_GEOMETRY_KHR};
+    g.geometryType = VK_GEOMETRY_TYPE_AABBS_KHR;
+    g.geometry.aabbs.sType = VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_GEOMETRY_AABBS_DATA_KHR;
+    g.geometry.aabbs.data.hostAddress = t.boxes.data();
+    g.geometry.aabbs.stride = sizeof(VkAabbPositionsKHR);
+    VkAccelerationStructureBuildRangeInfoKHR r{};
+    r.primitiveCount = uint32_t(t.boxes.size());
+    return t.buildBlas(std::vector<VkAccelerationStructureGeometryKHR>{g},
+                       std::vector<VkAccelerationStructureBuildRangeInfoKHR>{r});
 }
 
 }  // namespace

@@ -1,0 +1,152 @@
+// Writes the seed corpora of the fuzz targets: `vkas_fuzz_make_corpus <dir>` fills <dir>/deserialize (serialized
+// structures of every kind, handle arrays written as fuzz_deserialize's tokens) and <dir>/build (BuildSpec inputs
+// that decode to valid builds of every geometry type and mode). fuzz/corpus/ holds its output.
+#include <cstdio>
+#include <string>
+#include <sys/stat.h>
+
+#include "build_spec.hpp"
+#include "fuzz_common.hpp"
+
+namespace {
+
+using fz::BuildSpec;
+using fz::Device;
+using fz::Structure;
+
+void writeFile(const std::string& path, const uint8_t* data, size_t size) {
+    FILE* f = std::fopen(path.c_str(), "wb");
+    FZ_CHECK(f != nullptr, "cannot write %s", path.c_str());
+    FZ_CHECK(std::fwrite(data, 1, size, f) == size, "short write to %s", path.c_str());
+    std::fclose(f);
+    std::printf("  %s (%zu bytes)\n", path.c_str(), size);
+}
+
+// Serializes `s` and writes it with its handle array as tokens (fuzz_deserialize.cpp).
+void writeBlob(Device& d, const Structure& s, const std::string& path) {
+    VkDeviceSize size = 0;
+    FZ_CHECK(d.vkWriteAccelerationStructuresPropertiesKHR(d.device, 1, &s.handle,
+                                                          VK_QUERY_TYPE_ACCELERATION_STRUCTURE_SERIALIZATION_SIZE_KHR,
+                                                          sizeof size, &size, sizeof size) == VK_SUCCESS,
+             "size query");
+    fz::Region blob(size);
+    VkCopyAccelerationStructureToMemoryInfoKHR ci{VK_STRUCTURE_TYPE_COPY_ACCELERATION_STRUCTURE_TO_MEMORY_INFO_KHR};
+    ci.src = s.handle;
+    ci.dst.hostAddress = blob.data;
+    ci.mode = VK_COPY_ACCELERATION_STRUCTURE_MODE_SERIALIZE_KHR;
+    FZ_CHECK(d.vkCopyAccelerationStructureToMemoryKHR(d.device, VK_NULL_HANDLE, &ci) == VK_SUCCESS, "serialize");
+    uint64_t n;
+    std::memcpy(&n, blob.data + 48, 8);
+    const uint64_t tokens[][2] = {{uint64_t(d.blasTriangles.handle), 1}, {uint64_t(d.blasAabbs.handle), 3},
+                                  {uint64_t(d.blasSpheres.handle), 4},   {uint64_t(d.blasLss.handle), 5},
+                                  {uint64_t(d.tlas.handle), 6}};
+    for (uint64_t k = 0; k < n; ++k) {
+        uint64_t v;
+        std::memcpy(&v, blob.data + 56 + 8 * k, 8);
+        uint64_t token = v == 0 ? 0 : 12;  // 12: an unknown value
+        for (const auto& t : tokens)
+            if (t[0] == v) token = t[1];
+        std::memcpy(blob.data + 56 + 8 * k, &token, 8);
+    }
+    writeFile(path, blob.data, blob.size);
+}
+
+void writeSpec(const std::string& path, const BuildSpec& spec, size_t payloadSize, uint64_t seed) {
+    std::vector<uint8_t> bytes(sizeof spec + payloadSize);
+    std::memcpy(bytes.data(), &spec, sizeof spec);
+    fz::Rng rng(seed);
+    for (size_t i = sizeof spec; i < bytes.size(); ++i) bytes[i] = uint8_t(rng.next());
+    writeFile(path, bytes.data(), bytes.size());
+}
+
+BuildSpec validSpec(uint32_t kind, uint16_t count) {
+    BuildSpec s{};
+    s.kind = uint8_t(kind);
+    s.geometryCount = 1;
+    for (auto& g : s.g) {
+        g.format = 0;  // R32G32B32_SFLOAT
+        g.indexType = 2;  // UINT32
+        g.fix = fz::kAutoMaxVertex | fz::kAutoStride | fz::kAlign | fz::kNiceData;
+        g.count = count;
+        g.indexSpan = 40;
+    }
+    return s;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    if (argc != 2) {
+        std::fprintf(stderr, "usage: %s <corpus dir>\n", argv[0]);
+        return 2;
+    }
+    const std::string dir = argv[1];
+    ::mkdir(dir.c_str(), 0755);
+    ::mkdir((dir + "/deserialize").c_str(), 0755);
+    ::mkdir((dir + "/build").c_str(), 0755);
+    Device& d = fz::validatingDevice();
+
+    // Serialized structures: each real structure of the harness, and a larger mesh (a deeper tree).
+    writeBlob(d, d.blasTriangles, dir + "/deserialize/blas_triangles.bin");
+    writeBlob(d, d.blasAabbs, dir + "/deserialize/blas_aabbs.bin");
+    writeBlob(d, d.blasSpheres, dir + "/deserialize/blas_spheres.bin");
+    writeBlob(d, d.blasLss, dir + "/deserialize/blas_lss.bin");
+    writeBlob(d, d.tlas, dir + "/deserialize/tlas.bin");
+    {
+        fz::Rng rng(7);
+        std::vector<float> v(3 * 3 * 120);
+        for (size_t i = 0; i < v.size(); i += 9) {
+            const float c[3] = {rng.uniform(-5, 5), rng.uniform(-5, 5), rng.uniform(-5, 5)};
+            for (int k = 0; k < 9; ++k) v[i + k] = c[k % 3] + rng.uniform(-0.4f, 0.4f);
+        }
+        VkAccelerationStructureGeometryKHR g{VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_GEOMETRY_KHR};
+        g.geometryType = VK_GEOMETRY_TYPE_TRIANGLES_KHR;
+        g.flags = VK_GEOMETRY_OPAQUE_BIT_KHR;
+        auto& t = g.geometry.triangles;
+        t.sType = VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_GEOMETRY_TRIANGLES_DATA_KHR;
+        t.vertexFormat = VK_FORMAT_R32G32B32_SFLOAT;
+        t.vertexData.hostAddress = v.data();
+        t.vertexStride = 12;
+        t.maxVertex = uint32_t(v.size() / 3 - 1);
+        t.indexType = VK_INDEX_TYPE_NONE_KHR;
+        Structure mesh = d.buildSimple(VK_ACCELERATION_STRUCTURE_TYPE_BOTTOM_LEVEL_KHR, g, uint32_t(v.size() / 9),
+                                       VK_BUILD_ACCELERATION_STRUCTURE_ALLOW_UPDATE_BIT_KHR);
+        writeBlob(d, mesh, dir + "/deserialize/blas_mesh120.bin");
+        d.destroyStructure(mesh);
+    }
+
+    // Build inputs: valid builds of each geometry type, then modes.
+    const char* names[5] = {"triangles", "aabbs", "instances", "spheres", "lss"};
+    for (uint32_t kind = 0; kind < 5; ++kind)
+        writeSpec(dir + "/build/" + names[kind] + ".bin", validSpec(kind, kind == 2 ? 6 : 24), 512, kind);
+    BuildSpec s = validSpec(0, 40);
+    s.g[0].indexType = 1;   // UINT16
+    s.g[0].transform = 1;   // a transform at offset 0
+    s.g[0].format = 4;      // R16G16B16_SFLOAT
+    s.geometryCount = 2;
+    s.g[1].indexType = 0;   // not indexed
+    writeSpec(dir + "/build/triangles_two_geometries.bin", s, 512, 10);
+    s = validSpec(0, 30);
+    s.mode = 1 | 8;         // update, ppGeometries
+    s.update = 2;           // new vertex data (not indexed: an update must keep the index values)
+    s.g[0].indexType = 0;
+    writeSpec(dir + "/build/triangles_update.bin", s, 512, 11);
+    s = validSpec(1, 60);
+    s.mode = 4 | 16;        // deferred, two infos
+    s.buildFlags = 2;       // ALLOW_COMPACTION
+    writeSpec(dir + "/build/aabbs_deferred_two_infos.bin", s, 512, 12);
+    s = validSpec(2, 9);
+    s.g[0].instances = 1;   // arrayOfPointers
+    writeSpec(dir + "/build/instances_pointers.bin", s, 640, 13);
+    s = validSpec(4, 20);
+    s.g[0].lss = 1 | 2 | (1 << 3);  // SUCCESSIVE, CHAINED, index stride 1
+    s.g[0].radius = 1;              // R16 radii
+    s.mode = 1 | 2;                 // update in place
+    writeSpec(dir + "/build/lss_successive_update.bin", s, 512, 14);
+    s = validSpec(3, 20);
+    s.g[0].indexType = 0;
+    s.asOffset = 1;
+    s.scratch = 5 << 2;
+    writeSpec(dir + "/build/spheres_offsets.bin", s, 512, 15);
+    return 0;
+}
