@@ -1,5 +1,7 @@
 #include "engine/bvh_builder.hpp"
 
+#include "engine/box4.hpp"
+
 #include <algorithm>
 #include <limits>
 #include <memory>
@@ -100,30 +102,56 @@ public:
     uint32_t nodeCount() const { return nodeCount_; }
 
 private:
+    // Per axis and bin: the primitives' bounds and their count. SSE boxes: a primitive extends three bins with six
+    // instructions. Counts are sums and bounds min/max, so chunks merged in any order give the same bins.
     struct Bins {
-        Aabb bounds[3][kBins];
-        uint32_t count[3][kBins] = {};
+        struct Box {  // trivially constructible: only the bins in use are initialised
+            __m128 lower, upper;
+        };
+        int binCount = kBins;
+        Box bounds[3][kBins];
+        uint32_t count[3][kBins];
+        explicit Bins(int n = kBins) : binCount(n) {
+            const __m128 inf = _mm_set1_ps(std::numeric_limits<float>::infinity());
+            for (int a = 0; a < 3; ++a)
+                for (int b = 0; b < n; ++b) count[a][b] = 0, bounds[a][b] = {inf, _mm_sub_ps(_mm_setzero_ps(), inf)};
+        }
+        void add(int a, int b, __m128 lo, __m128 up) {
+            bounds[a][b].lower = _mm_min_ps(bounds[a][b].lower, lo);
+            bounds[a][b].upper = _mm_max_ps(bounds[a][b].upper, up);
+            count[a][b]++;
+        }
         void merge(const Bins& o) {
             for (int a = 0; a < 3; ++a)
-                for (int b = 0; b < kBins; ++b) bounds[a][b].extend(o.bounds[a][b]), count[a][b] += o.count[a][b];
+                for (int b = 0; b < binCount; ++b) {
+                    bounds[a][b].lower = _mm_min_ps(bounds[a][b].lower, o.bounds[a][b].lower);
+                    bounds[a][b].upper = _mm_max_ps(bounds[a][b].upper, o.bounds[a][b].upper);
+                    count[a][b] += o.count[a][b];
+                }
         }
     };
     struct RangeBounds {
-        Aabb bounds, centroids;
+        Box4 bounds, centroids;
         void merge(const RangeBounds& o) { bounds.extend(o.bounds), centroids.extend(o.centroids); }
     };
+
+    // A primitive's bounds from its PrimRef (lane 3, the index, cleared).
+    static void load(const PrimRef& p, __m128& lo, __m128& up) {
+        lo = xyz(_mm_loadu_ps(p.lower));
+        up = xyz(_mm_loadu_ps(p.upper));
+    }
 
     // Runs fn over [begin, end) chunks of r into `out`: in one go, or in parallel chunks merged afterwards when the
     // range is large and the builder has a ParallelFor. Only for reductions whose merge is exact (sums, min/max).
     template <typename Acc, typename Fn>
-    void forChunks(const Range& r, const Fn& fn, Acc& out) {
+    void forChunks(const Range& r, const Fn& fn, Acc& out, const Acc& empty) {
         constexpr uint32_t kChunk = 16384;
         if (!parallel_ || r.count() < 4 * kChunk) {
             fn(r.begin, r.end, out);
             return;
         }
         const uint32_t chunks = (r.count() + kChunk - 1) / kChunk;
-        std::vector<Acc> partial(chunks);
+        std::vector<Acc> partial(chunks, empty);
         (*parallel_)(chunks, [&](uint32_t c) {
             fn(r.begin + c * kChunk, std::min(r.end, r.begin + (c + 1) * kChunk), partial[c]);
         });
@@ -134,13 +162,15 @@ private:
         RangeBounds rb;
         forChunks(r, [&](uint32_t begin, uint32_t end, RangeBounds& local) {
             for (uint32_t i = begin; i < end; ++i) {
-                local.bounds.extend(refLower(refs_[i]));
-                local.bounds.extend(refUpper(refs_[i]));
-                local.centroids.extend(refCentroid2(refs_[i]));
+                __m128 lo, up;
+                load(refs_[i], lo, up);
+                local.bounds.extend(lo, up);
+                const __m128 c = _mm_add_ps(lo, up);
+                local.centroids.extend(c, c);
             }
-        }, rb);
-        r.bounds = rb.bounds;
-        r.centroids = rb.centroids;
+        }, rb, RangeBounds{});
+        r.bounds = rb.bounds.aabb();
+        r.centroids = rb.centroids.aabb();
     }
 
     void halve(const Range& r, Range& left, Range& right) {
@@ -158,48 +188,67 @@ private:
         if (r.depth >= format::kSahDepthLimit || !(extent.x > 0 || extent.y > 0 || extent.z > 0)) {
             return halve(r, left, right);
         }
+        // Few primitives need few bins: clearing and sweeping 32 bins would cost more than binning them.
+        const int binCount = int(std::min<uint32_t>(kBins, std::max<uint32_t>(4, r.count())));
         float scale[3];
-        for (int a = 0; a < 3; ++a) scale[a] = extent[a] > 0 ? (kBins * 0.99999f) / extent[a] : 0.0f;
-
-        auto binOf = [&](const PrimRef& p, int a) {
-            float f = (p.lower[a] + p.upper[a] - cl[a]) * scale[a];
-            // Written so that NaN or infinite coordinates (invalid input) still land in a valid bin.
-            return f >= 1.0f ? (f < float(kBins) ? int(f) : kBins - 1) : 0;
+        for (int a = 0; a < 3; ++a) scale[a] = extent[a] > 0 ? (float(binCount) * 0.99999f) / extent[a] : 0.0f;
+        const __m128 origin = _mm_set_ps(0.0f, cl.z, cl.y, cl.x);
+        const __m128 scale4 = _mm_set_ps(0.0f, scale[2], scale[1], scale[0]);
+        const __m128 lastBin = _mm_set1_ps(float(binCount - 1));
+        // The bins of a primitive along x, y, z: clamped in float first, so NaN lands in bin 0 and +inf in the
+        // last (invalid input still gets valid bins), then truncated.
+        auto binsOf = [&](__m128 lo, __m128 up) {
+            const __m128 f = _mm_mul_ps(_mm_sub_ps(_mm_add_ps(lo, up), origin), scale4);
+            return _mm_cvttps_epi32(_mm_min_ps(_mm_max_ps(f, _mm_setzero_ps()), lastBin));
         };
-        Bins bins;
-        // Counts are sums and bounds are min/max, so chunked binning merged in any order gives the same bins.
+        Bins bins(binCount);
         forChunks(r, [&](uint32_t begin, uint32_t end, Bins& local) {
-            for (uint32_t i = begin; i < end; ++i) {
-                const PrimRef& p = refs_[i];
-                for (int a = 0; a < 3; ++a) {
-                    int b = binOf(p, a);
-                    local.count[a][b]++;
-                    local.bounds[a][b].extend(refLower(p));
-                    local.bounds[a][b].extend(refUpper(p));
+            uint32_t i = begin;
+            if (end - begin >= 256) {
+                // Neighbouring primitives tend to fall into the same bins: a second set of bins for every other
+                // primitive halves the chains of dependent updates. Merged exactly (min/max, sums).
+                Bins odd(binCount);
+                for (; i + 1 < end; i += 2) {
+                    __m128 lo0, up0, lo1, up1;
+                    load(refs_[i], lo0, up0);
+                    load(refs_[i + 1], lo1, up1);
+                    alignas(16) int b0[4], b1[4];
+                    _mm_store_si128(reinterpret_cast<__m128i*>(b0), binsOf(lo0, up0));
+                    _mm_store_si128(reinterpret_cast<__m128i*>(b1), binsOf(lo1, up1));
+                    for (int a = 0; a < 3; ++a) {
+                        local.add(a, b0[a], lo0, up0);
+                        odd.add(a, b1[a], lo1, up1);
+                    }
                 }
+                local.merge(odd);
             }
-        }, bins);
-        auto& binCount = bins.count;
-        auto& binBounds = bins.bounds;
+            for (; i < end; ++i) {
+                __m128 lo, up;
+                load(refs_[i], lo, up);
+                alignas(16) int b[4];
+                _mm_store_si128(reinterpret_cast<__m128i*>(b), binsOf(lo, up));
+                for (int a = 0; a < 3; ++a) local.add(a, b[a], lo, up);
+            }
+        }, bins, Bins(binCount));
         float bestCost = std::numeric_limits<float>::infinity();
         int bestAxis = -1, bestBin = -1;
         for (int a = 0; a < 3; ++a) {
             if (scale[a] == 0.0f) continue;
             float rightArea[kBins];
             uint32_t rightCount[kBins];
-            Aabb acc;
+            Box4 acc;
             uint32_t cnt = 0;
-            for (int b = kBins - 1; b > 0; --b) {
-                acc.extend(binBounds[a][b]);
-                cnt += binCount[a][b];
+            for (int b = binCount - 1; b > 0; --b) {
+                acc.extend(bins.bounds[a][b].lower, bins.bounds[a][b].upper);
+                cnt += bins.count[a][b];
                 rightArea[b] = acc.halfArea();
                 rightCount[b] = cnt;
             }
-            acc = Aabb{};
+            acc = Box4{};
             cnt = 0;
-            for (int b = 0; b < kBins - 1; ++b) {  // split between bin b and b + 1
-                acc.extend(binBounds[a][b]);
-                cnt += binCount[a][b];
+            for (int b = 0; b < binCount - 1; ++b) {  // split between bin b and b + 1
+                acc.extend(bins.bounds[a][b].lower, bins.bounds[a][b].upper);
+                cnt += bins.count[a][b];
                 if (cnt == 0 || rightCount[b + 1] == 0) continue;
                 float cost = acc.halfArea() * float(cnt) + rightArea[b + 1] * float(rightCount[b + 1]);
                 if (cost < bestCost) {
@@ -211,21 +260,48 @@ private:
         }
         if (bestAxis < 0) return halve(r, left, right);
 
-        // Partition in place: primitives in bins <= bestBin go left.
+        // Partition in place (primitives in bins <= bestBin go left), gathering each side's bounds and centroid
+        // bounds on the way: the children need no further pass.
+        auto goesLeft = [&](__m128 lo, __m128 up) {
+            alignas(16) int b[4];
+            _mm_store_si128(reinterpret_cast<__m128i*>(b), binsOf(lo, up));
+            return b[bestAxis] <= bestBin;
+        };
+        RangeBounds lb, rb;
+        auto add = [](RangeBounds& side, __m128 lo, __m128 up) {
+            side.bounds.extend(lo, up);
+            const __m128 c = _mm_add_ps(lo, up);
+            side.centroids.extend(c, c);
+        };
         uint32_t i = r.begin, j = r.end;
-        while (i < j) {
-            if (binOf(refs_[i], bestAxis) <= bestBin) {
+        for (;;) {
+            __m128 lo, up;
+            while (i < j) {
+                load(refs_[i], lo, up);
+                if (!goesLeft(lo, up)) break;
+                add(lb, lo, up);
                 ++i;
-            } else {
-                --j;
-                std::swap(refs_[i], refs_[j]);
             }
+            __m128 lo2, up2;
+            while (i < j) {
+                load(refs_[j - 1], lo2, up2);
+                if (goesLeft(lo2, up2)) break;
+                add(rb, lo2, up2);
+                --j;
+            }
+            if (i >= j) break;
+            // refs_[i] goes right and refs_[j - 1] left: swap them.
+            std::swap(refs_[i], refs_[j - 1]);
+            add(lb, lo2, up2);
+            add(rb, lo, up);
+            ++i;
+            --j;
         }
         left.begin = r.begin, left.end = i;
         right.begin = i, right.end = r.end;
         left.depth = right.depth = r.depth + 1;
-        finishRange(left);
-        finishRange(right);
+        left.bounds = lb.bounds.aabb(), left.centroids = lb.centroids.aabb();
+        right.bounds = rb.bounds.aabb(), right.centroids = rb.centroids.aabb();
     }
 
     PrimRef* refs_;

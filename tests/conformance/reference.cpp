@@ -58,9 +58,11 @@ Reference::Reference(const Scene& scene) : scene_(scene) {
                 t.indexData.hostAddress = scene.blob.data() + g.triangles.indexOffset;
             if (g.triangles.hasTransform) t.transformData.hostAddress = scene.blob.data() + g.triangles.transformOffset;
             view.triangles->geometries.push_back(oracle::fetchTriangles(geom, g.range));
-            // lavapipe-notes 1: only a NaN in the third vertex upsets lavapipe's bounds.
+            // lavapipe-notes 1: an inactive triangle can hide its BLAS neighbours from lavapipe. First seen with a
+            // NaN in the third vertex only; seed 7930896381578007571 (inactive_primitives) shows it with NaN X in the
+            // first or second vertex too, so any inactive triangle counts.
             for (const oracle::Triangle& tri : view.triangles->geometries.back().triangles)
-                view.hasInactive |= !tri.active && std::isnan(tri.v[2][0]);
+                view.hasInactive |= !tri.active;
         }
         view.triangles->computeBounds();
         blases_.push_back(std::move(view));

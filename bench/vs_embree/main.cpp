@@ -1,0 +1,434 @@
+// vkas_bench_embree: vkas against Intel Embree 3 in one process, on the same meshes and rays (issue 7).
+// Builds (default, PREFER_FAST_TRACE, PREFER_FAST_BUILD, refit against Embree MEDIUM, HIGH, LOW, REFIT; one thread),
+// traversal (camera, diffuse, shadow rays; vkasTraceRays and vkasRayQuery* against rtcIntersect1/rtcOccluded1 on one
+// thread and against Embree's best call on all threads), hit agreement, deferred-build thread scaling, and the
+// issue's targets. Prints one table and optionally writes JSON. See docs/PERFORMANCE.md ("Comparison with Embree").
+#include "embree_side.hpp"
+#include "rays.hpp"
+#include "report.hpp"
+#include "scenes.hpp"
+#include "vkas_side.hpp"
+
+#include <CLI/CLI.hpp>
+
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <random>
+#include <sstream>
+
+using namespace vb;
+
+namespace {
+
+struct Options {
+    std::vector<std::string> scenes, meshes;
+    unsigned threads = std::max(1u, std::thread::hardware_concurrency());
+    size_t rays = 0;
+    int reps = 0;
+    unsigned instances = 0;
+    std::string json, threadsList, scalingScene, dataDir;
+    bool quick = false, noScaling = false;
+    size_t showDisagreements = 0;
+};
+
+struct Target {
+    std::string scene, what;
+    double value, goal;
+    bool higherIsBetter;
+};
+
+struct Variant {
+    const char* name;
+    VkBuildAccelerationStructureFlagsKHR flags;
+    const char* embreeName;
+    RTCBuildQuality quality;
+};
+const Variant kVariants[] = {
+    {"default", 0, "MEDIUM", RTC_BUILD_QUALITY_MEDIUM},
+    {"PREFER_FAST_TRACE", VK_BUILD_ACCELERATION_STRUCTURE_PREFER_FAST_TRACE_BIT_KHR, "HIGH", RTC_BUILD_QUALITY_HIGH},
+    {"PREFER_FAST_BUILD", VK_BUILD_ACCELERATION_STRUCTURE_PREFER_FAST_BUILD_BIT_KHR, "LOW", RTC_BUILD_QUALITY_LOW},
+};
+
+struct BuildRow {
+    std::string vkasName, embreeName;
+    double vkasMs, vkasBytes, vkasSah, embreeMs, embreeBytes, embreeSah;  // bytes per primitive; SAH < 0: not known
+};
+
+std::string ratio(double r) {
+    char b[32];
+    std::snprintf(b, sizeof b, "%.2fx", r);
+    return b;
+}
+
+std::vector<float> movedVertices(const Mesh& m) {
+    std::mt19937 rng(3);
+    std::uniform_real_distribution<float> u(0, 1);
+    std::vector<float> v = m.vertices;
+    for (size_t i = 0; i < 3 * m.vertexCount(); ++i) v[i] *= 1.0f + 0.01f * u(rng);
+    return v;
+}
+
+std::vector<Transform> movedInstances(const Scene& s) {
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<float> u(-1, 1);
+    const double d = meshBounds(s.mesh).diagonal() * 0.05;
+    std::vector<Transform> xs = s.instances;
+    for (Transform& x : xs) x[3] += float(d * u(rng)), x[7] += float(d * u(rng)), x[11] += float(d * u(rng));
+    return xs;
+}
+
+class Bench {
+public:
+    explicit Bench(const Options& o) : o_(o) {}
+    std::vector<Target> targets;
+    Json json;
+
+    void runScene(const Scene& sc);
+    void runScaling(const Scene& sc, const std::vector<unsigned>& threadCounts);
+
+private:
+    void printBuilds(const Scene& sc, const std::vector<BuildRow>& rows);
+    const Options& o_;
+};
+
+void Bench::printBuilds(const Scene& sc, const std::vector<BuildRow>& rows) {
+    const bool inst = sc.manyInstances();
+    const double n = double(inst ? sc.instances.size() : sc.mesh.triangleCount());
+    const char* unit = inst ? "inst" : "tri";
+    std::printf("  %-22s %9s %8s %7s %6s | %-22s %9s %8s %7s %6s | %6s %6s %6s\n", "build, 1 thread", "vkas ms",
+                inst ? "Minst/s" : "Mtris/s", inst ? "B/inst" : "B/tri", "SAH", "Embree", "ms", inst ? "Minst/s" : "Mtris/s",
+                inst ? "B/inst" : "B/tri", "SAH", "speed", "bytes", "SAH");
+    json.begin("builds", '[');
+    for (const BuildRow& r : rows) {
+        auto sah = [](double s) {
+            char b[16];
+            if (s < 0) return std::string("-");
+            std::snprintf(b, sizeof b, "%.1f", s);
+            return std::string(b);
+        };
+        char eb[16] = "-";  // Embree's monitor saw no net allocation (e.g. memory reused by its allocator)
+        if (r.embreeBytes > 0) std::snprintf(eb, sizeof eb, "%.1f", r.embreeBytes);
+        std::printf("  %-22s %9.1f %8.2f %7.1f %6s | %-22s %9.1f %8.2f %7s %6s | %6s %6s %6s\n", r.vkasName.c_str(),
+                    r.vkasMs, n / r.vkasMs / 1000, r.vkasBytes, sah(r.vkasSah).c_str(), r.embreeName.c_str(), r.embreeMs,
+                    n / r.embreeMs / 1000, eb, sah(r.embreeSah).c_str(), ratio(r.embreeMs / r.vkasMs).c_str(),
+                    r.embreeBytes > 0 ? ratio(r.vkasBytes / r.embreeBytes).c_str() : "-",
+                    r.vkasSah >= 0 && r.embreeSah >= 0 ? ratio(r.vkasSah / r.embreeSah).c_str() : "-");
+        json.begin(nullptr, '{').field("vkas", r.vkasName).field("vkas_ms", r.vkasMs).field("vkas_mprims_per_s", n / r.vkasMs / 1000);
+        json.field((std::string("vkas_bytes_per_") + unit).c_str(), r.vkasBytes).field("vkas_sah", r.vkasSah);
+        json.field("embree", r.embreeName).field("embree_ms", r.embreeMs).field("embree_mprims_per_s", n / r.embreeMs / 1000);
+        json.field((std::string("embree_bytes_per_") + unit).c_str(), r.embreeBytes).field("embree_sah", r.embreeSah);
+        json.field("speed_ratio", r.embreeMs / r.vkasMs).end('}');
+    }
+    json.end(']');
+}
+
+void Bench::runScene(const Scene& sc) {
+    const bool inst = sc.manyInstances();
+    const size_t tris = sc.mesh.triangleCount();
+    const double prims = double(inst ? sc.instances.size() : tris);
+    std::printf("\nscene %s: %zu triangles", sc.name.c_str(), tris);
+    if (inst) std::printf(" x %zu instances", sc.instances.size());
+    std::printf("%s  (%s)\n", sc.thin ? ", long thin triangles" : "", sc.source.c_str());
+    json.begin(nullptr, '{').field("name", sc.name).field("source", sc.source).field("triangles", double(tris));
+    json.field("instances", double(sc.instances.size())).field("long_thin", sc.thin);
+
+    VkasEngine vk1(1), vkN(o_.threads);
+    EmbreeEngine em1(1), emN(o_.threads);
+
+    // The rays, from Embree's closest hits of the camera rays (untimed).
+    emN.makeTraceScene(sc);
+    std::vector<VkasRay> rays[3];
+    rays[0] = cameraRays(sc, o_.rays);
+    std::vector<Hit> cameraHits;
+    emN.trace(EmbreeCall::One, false, true, rays[0], cameraHits, o_.threads, 1);
+    rays[1] = secondaryRays(sc, RayKind::Diffuse, rays[0], cameraHits, o_.rays);
+    rays[2] = secondaryRays(sc, RayKind::Shadow, rays[0], cameraHits, o_.rays);
+
+    // --- builds ---
+    std::vector<BuildRow> rows;
+    double variantRate[3][3] = {};  // [variant][ray kind] Mrays/s, vkasTraceRays on 1 thread
+    std::vector<Hit> vkBatch1[3];   // default build, 1 thread
+    VkasEngine::Structure blas{}, defaultTlas{};
+    std::vector<Box> instanceBoxes;
+    if (inst) {
+        VkasEngine::Build b = vk1.buildBottom(sc.mesh, 0, 1);
+        blas = b.s;
+        for (const Transform& x : sc.instances) instanceBoxes.push_back(transformBox(meshBounds(sc.mesh), x));
+    }
+    for (int v = 0; v < 3; ++v) {
+        const Variant& var = kVariants[v];
+        BuildRow row{var.name, var.embreeName};
+        VkasEngine::Build b = inst ? vk1.buildTop(sc.instances, blas.as, var.flags, o_.reps)
+                                   : vk1.buildBottom(sc.mesh, var.flags, o_.reps);
+        row.vkasMs = b.ms, row.vkasBytes = double(b.compactedSize) / prims, row.vkasSah = vk1.sah(b.s).cost();
+        VkasEngine::Build top = inst ? b : vk1.buildTop({}, b.s.as, 0, 1);
+        for (int k = 0; k < 3; ++k) {
+            std::vector<Hit> hits;
+            variantRate[v][k] = double(o_.rays) / vk1.traceBatch(top.s.as, k == 2, rays[k], hits, o_.reps) / 1000;
+            if (v == 0) vkBatch1[k] = std::move(hits);
+        }
+        const EmbreeEngine::Build e = inst ? em1.buildInstances(sc.mesh, sc.instances, var.quality, o_.reps)
+                                           : em1.buildMesh(sc.mesh, var.quality, o_.reps);
+        row.embreeMs = e.ms, row.embreeBytes = double(e.bytes) / prims;
+        row.embreeSah = inst ? em1.userBvhSah(instanceBoxes, var.quality).cost() : em1.userBvhSah(sc.mesh, var.quality).cost();
+        rows.push_back(row);
+        if (v == 0) {
+            defaultTlas = top.s;
+        } else {
+            if (!inst) vk1.destroy(top.s);
+            vk1.destroy(b.s);
+        }
+    }
+    {  // refit
+        BuildRow row{"refit (MODE_UPDATE)", inst ? "REFIT (dynamic recommit)" : "REFIT"};
+        const auto flags = VK_BUILD_ACCELERATION_STRUCTURE_ALLOW_UPDATE_BIT_KHR;
+        VkasEngine::Build b = inst ? vk1.buildTop(sc.instances, blas.as, flags, 1) : vk1.buildBottom(sc.mesh, flags, 1);
+        const auto movedXs = inst ? movedInstances(sc) : std::vector<Transform>{};
+        const auto movedV = inst ? std::vector<float>{} : movedVertices(sc.mesh);
+        row.vkasMs = inst ? vk1.refitTop(b.s, sc.instances, movedXs, blas.as, flags, o_.reps)
+                          : vk1.refitBottom(b.s, sc.mesh, movedV, flags, o_.reps);
+        row.vkasBytes = double(b.compactedSize) / prims, row.vkasSah = vk1.sah(b.s).cost();
+        const EmbreeEngine::Build e = inst ? em1.recommitInstances(sc.mesh, sc.instances, movedXs, o_.reps)
+                                           : em1.refitMesh(sc.mesh, movedV, o_.reps);
+        row.embreeMs = e.ms, row.embreeBytes = double(e.bytes) / prims, row.embreeSah = -1;
+        rows.push_back(row);
+        vk1.destroy(b.s);
+    }
+    printBuilds(sc, rows);
+
+    // --- traversal ---
+    VkasEngine::Structure nBlas{}, nTlas{};
+    if (inst) {
+        nBlas = vkN.buildBottom(sc.mesh, 0, 1).s;
+        nTlas = vkN.buildTop(sc.instances, nBlas.as, 0, 1).s;
+    } else {
+        nBlas = vkN.buildBottom(sc.mesh, 0, 1).s;
+        nTlas = vkN.buildTop({}, nBlas.as, 0, 1).s;
+    }
+    std::printf("  %-8s %-9s %-30s %8s | %-22s %8s | %6s\n", "rays", "threads", "vkas", "Mrays/s", "Embree", "Mrays/s", "ratio");
+    json.begin("traversal", '[');
+    double rate[3][4] = {};  // [kind]: vkas batch 1, vkas query 1, embree 1 thread, vkas batch N
+    double emBestN[3] = {};
+    std::string agreementText[3];
+    const size_t n = o_.rays;
+    for (int k = 0; k < 3; ++k) {
+        const bool anyHit = k == 2, coherent = k == 0;
+        const char* kind = rayKindName(RayKind(k));
+        std::vector<Hit> em1Hits, rqHits, batchN, tmp, emClosest;
+        const double emMs = emN.trace(EmbreeCall::One, anyHit, coherent, rays[k], em1Hits, 1, o_.reps);
+        const double rqMs = vk1.traceRayQuery(defaultTlas.as, anyHit, rays[k], rqHits, o_.reps);
+        const double bNMs = vkN.traceBatch(nTlas.as, anyHit, rays[k], batchN, o_.reps);
+        rate[k][0] = variantRate[0][k], rate[k][1] = n / rqMs / 1000, rate[k][2] = n / emMs / 1000, rate[k][3] = n / bNMs / 1000;
+        const char* mode = anyHit ? "any-hit" : "closest";
+        const std::string batchName = std::string("vkasTraceRays ") + mode;
+        const char* e1 = embreeCallName(EmbreeCall::One, anyHit);
+        std::printf("  %-8s %-9s %-30s %8.3f | %-22s %8.3f | %6s\n", kind, "1", batchName.c_str(), rate[k][0], e1, rate[k][2],
+                    ratio(rate[k][0] / rate[k][2]).c_str());
+        std::printf("  %-8s %-9s %-30s %8.3f | %-22s %8.3f | %6s\n", kind, "1", "vkasRayQuery*", rate[k][1], e1, rate[k][2],
+                    ratio(rate[k][1] / rate[k][2]).c_str());
+        json.begin(nullptr, '{').field("rays", kind).field("threads", 1.0).field("vkas_batch_mrays", rate[k][0]);
+        json.field("vkas_ray_query_mrays", rate[k][1]).field("embree_call", e1).field("embree_mrays", rate[k][2]).end('}');
+        // All threads: Embree's calls, the best one named.
+        EmbreeCall best = EmbreeCall::One;
+        json.begin(nullptr, '{').field("rays", kind).field("threads", double(o_.threads)).field("vkas_batch_mrays", rate[k][3]);
+        for (EmbreeCall c : {EmbreeCall::One, EmbreeCall::Packet8, EmbreeCall::Packet16, EmbreeCall::Stream}) {
+            const double r = n / emN.trace(c, anyHit, coherent, rays[k], tmp, o_.threads, o_.reps) / 1000;
+            json.field((std::string("embree_") + embreeCallName(c, anyHit) + "_mrays").c_str(), r);
+            if (r > emBestN[k]) emBestN[k] = r, best = c;
+        }
+        json.end('}');
+        std::printf("  %-8s %-9u %-30s %8.3f | %-22s %8.3f | %6s\n", kind, o_.threads, batchName.c_str(), rate[k][3],
+                    (std::string(embreeCallName(best, anyHit)) + " (best)").c_str(), emBestN[k],
+                    ratio(rate[k][3] / emBestN[k]).c_str());
+        // Agreement with Embree, and vkas's paths with each other.
+        if (anyHit) emN.trace(EmbreeCall::One, false, false, rays[k], emClosest, o_.threads, 1);
+        const Agreement g = compareHits(rays[k], vkBatch1[k], em1Hits, anyHit, anyHit ? &emClosest : nullptr);
+        const size_t rqDiff = countDifferent(vkBatch1[k], rqHits), nDiff = countDifferent(vkBatch1[k], batchN);
+        auto exactT = [&](size_t i, const Hit& h) {  // the ray against the hit triangle's plane, in double
+            const VkasRay& r = rays[k][i];
+            double v[3][3];
+            for (int c = 0; c < 3; ++c) {
+                const float* p = &sc.mesh.vertices[3 * sc.mesh.indices[3 * size_t(h.prim) + c]];
+                for (int a = 0; a < 3; ++a)
+                    v[c][a] = inst ? double(sc.instances[size_t(h.inst)][4 * a]) * p[0] + double(sc.instances[size_t(h.inst)][4 * a + 1]) * p[1] +
+                                         double(sc.instances[size_t(h.inst)][4 * a + 2]) * p[2] + sc.instances[size_t(h.inst)][4 * a + 3]
+                                   : p[a];
+            }
+            const double e1[3] = {v[1][0] - v[0][0], v[1][1] - v[0][1], v[1][2] - v[0][2]};
+            const double e2[3] = {v[2][0] - v[0][0], v[2][1] - v[0][1], v[2][2] - v[0][2]};
+            const double n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
+            double num = 0, den = 0;
+            for (int a = 0; a < 3; ++a) num += n[a] * (v[0][a] - r.origin[a]), den += n[a] * double(r.direction[a]);
+            return num / den;
+        };
+        for (const std::string& e : examples(rays[k], vkBatch1[k], em1Hits, anyHit, o_.showDisagreements, exactT))
+            std::printf("    %s %s\n", kind, e.c_str());
+        agreementText[k] = std::string(kind) + " vs " + e1 + ": " + describe(g, anyHit) +
+                           "; vkas ray query vs batch: " + std::to_string(rqDiff) + " differ, batch " +
+                           std::to_string(o_.threads) + " threads vs 1: " + std::to_string(nDiff) + " differ";
+        json.begin(nullptr, '{').field("rays", kind).field("agreement_rays", double(g.rays));
+        json.field("hit_miss", double(g.hitMiss)).field("hit_miss_at_edge", double(g.hitMissAtEdge));
+        json.field("hit_miss_at_tmax", double(g.hitMissAtEnd)).field("ties", double(g.tie));
+        json.field("different_hits_past_edge", double(g.differentHitAtEdge)).field("different_hits", double(g.differentHit)).field("unexplained", double(g.disagreements()));
+        json.field("max_rel_t_diff", g.maxRelT).field("max_t_diff_over_tolerance", g.maxTolT).field("ray_query_vs_batch_differ", double(rqDiff));
+        json.field("batch_threads_vs_1_differ", double(nDiff)).end('}');
+    }
+    for (int v = 1; v < 3; ++v)
+        for (int k = 0; k < 3; ++k) {
+            const std::string name = std::string("vkasTraceRays ") + kVariants[v].name;
+            std::printf("  %-8s %-9s %-30s %8.3f | %-22s %8.3f | %6s\n", rayKindName(RayKind(k)), "1", name.c_str(),
+                        variantRate[v][k], "(vkas default build)", variantRate[0][k],
+                        ratio(variantRate[v][k] / variantRate[0][k]).c_str());
+            json.begin(nullptr, '{').field("rays", rayKindName(RayKind(k))).field("threads", 1.0);
+            json.field("vkas_variant", kVariants[v].name).field("vkas_batch_mrays", variantRate[v][k]);
+            json.field("vkas_default_batch_mrays", variantRate[0][k]).end('}');
+        }
+    json.end(']');
+    std::printf("  agreement (vkasTraceRays 1 thread, default build, against Embree):\n");
+    for (const std::string& s : agreementText) std::printf("    %s\n", s.c_str());
+    json.end('}');
+
+    // --- targets ---
+    const std::string s = sc.name;
+    const BuildRow &def = rows[0], &trace = rows[1], &fast = rows[2], &refit = rows[3];
+    targets.push_back({s, "default build >= 1.5x Embree MEDIUM (1 thread)", def.embreeMs / def.vkasMs, 1.5, true});
+    targets.push_back({s, "default build SAH cost <= Embree MEDIUM's", def.vkasSah / def.embreeSah, 1.0, false});
+    targets.push_back({s, "PREFER_FAST_BUILD >= 2x Embree LOW", fast.embreeMs / fast.vkasMs, 2.0, true});
+    targets.push_back({s, "PREFER_FAST_BUILD diffuse tracing within 25% of default (time)", variantRate[2][1] / variantRate[0][1], 0.8, true});
+    if (sc.thin)
+        targets.push_back({s, "PREFER_FAST_TRACE diffuse tracing >= 1.1x default", variantRate[1][1] / variantRate[0][1], 1.1, true});
+    targets.push_back({s, "PREFER_FAST_TRACE build >= Embree HIGH", trace.embreeMs / trace.vkasMs, 1.0, true});
+    targets.push_back({s, "refit >= Embree REFIT", refit.embreeMs / refit.vkasMs, 1.0, true});
+    targets.push_back({s, "vkasTraceRays closest, diffuse, 1 thread >= 1.25x rtcIntersect1", rate[1][0] / rate[1][2], 1.25, true});
+    targets.push_back({s, "vkasTraceRays any-hit, shadow, 1 thread >= 1.25x rtcOccluded1", rate[2][0] / rate[2][2], 1.25, true});
+    for (int k = 0; k < 3; ++k)
+        targets.push_back({s, std::string("vkasTraceRays ") + rayKindName(RayKind(k)) + ", all threads >= Embree's best call",
+                           rate[k][3] / emBestN[k], 1.0, true});
+    targets.push_back({s, "compacted bytes per primitive <= Embree MEDIUM's", def.vkasBytes / def.embreeBytes, 1.0, false});
+
+    vkN.destroy(nTlas);
+    vkN.destroy(nBlas);
+    vk1.destroy(defaultTlas);
+    if (inst) vk1.destroy(blas);
+}
+
+void Bench::runScaling(const Scene& sc, const std::vector<unsigned>& threadCounts) {
+    const size_t tris = sc.mesh.triangleCount();
+    std::printf("\ndeferred build scaling, %s (%zu triangles), default flags / Embree MEDIUM, best of %d\n", sc.name.c_str(),
+                tris, o_.reps);
+    std::printf("  %7s | %10s %8s %8s | %10s %8s %8s | %6s\n", "threads", "vkas ms", "Mtris/s", "speed-up", "Embree ms",
+                "Mtris/s", "speed-up", "ratio");
+    VkasEngine vk(1);
+    double vk1 = 0, em1 = 0;
+    json.begin("scaling", '{').field("scene", sc.name).field("triangles", double(tris)).begin("runs", '[');
+    for (unsigned t : threadCounts) {
+        VkasEngine::Build b = vk.buildBottom(sc.mesh, 0, o_.reps, t);
+        vk.destroy(b.s);
+        EmbreeEngine em(t);
+        const double emMs = em.buildMesh(sc.mesh, RTC_BUILD_QUALITY_MEDIUM, o_.reps).ms;
+        if (t == threadCounts.front()) vk1 = b.ms * t, em1 = emMs * t;  // normalised to one thread
+        std::printf("  %7u | %10.1f %8.2f %8.2f | %10.1f %8.2f %8.2f | %6s\n", t, b.ms, tris / b.ms / 1000, vk1 / b.ms, emMs,
+                    tris / emMs / 1000, em1 / emMs, ratio(emMs / b.ms).c_str());
+        json.begin(nullptr, '{').field("threads", double(t)).field("vkas_ms", b.ms).field("embree_ms", emMs).end('}');
+        if (t == 16 && threadCounts.front() == 1)
+            targets.push_back({sc.name, "deferred build, 16 joined threads >= 12x 1 thread", vk1 / b.ms, 12.0, true});
+    }
+    json.end(']').end('}');
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    Options o;
+    CLI::App app{"vkas_bench_embree: vkas against Embree 3 on the same meshes and rays (builds, traversal, agreement, scaling)"};
+    app.add_option("--scene", o.scenes, "named scenes (see --list); default: all, or bunny and instances with --quick");
+    app.add_option("--mesh", o.meshes, "mesh files assimp reads (.obj, .off, .3ds, .ac, .ply, ...)");
+    bool list = false;
+    app.add_flag("--list", list, "list the named scenes and exit");
+    app.add_option("--threads", o.threads, "threads for the all-threads traversal runs (default: hardware threads)")
+        ->check(CLI::Range(1u, 1024u));
+    app.add_option("--rays", o.rays, "rays of each kind (default 2^20; 2^15 with --quick)");
+    app.add_option("--reps", o.reps, "repetitions, best taken (default 3; 1 with --quick)")->check(CLI::Range(1, 100));
+    app.add_option("--instances", o.instances, "instances in the 'instances' scene (default 10000; 1024 with --quick)");
+    app.add_option("--threads-list", o.threadsList, "joined-thread counts of the scaling runs (default 1,2,4,8,16; 1,2 with --quick)");
+    app.add_option("--scaling-scene", o.scalingScene, "scene of the scaling runs (default bunny-4m; bunny with --quick)");
+    app.add_flag("--no-scaling", o.noScaling, "skip the deferred-build scaling runs");
+    app.add_option("--show-disagreements", o.showDisagreements, "print up to N rays per kind where vkas and Embree differ");
+    app.add_option("--json", o.json, "write the results as JSON to this file");
+    app.add_option("--data-dir", o.dataDir, "where scripts/setup-bench.sh extracted the CGAL meshes");
+    app.add_flag("--quick", o.quick, "a short smoke run: the bunny and a small instance scene, few rays, one repetition");
+    CLI11_PARSE(app, argc, argv);
+    if (list) {
+        for (const SceneInfo& s : sceneCatalogue()) std::printf("%-16s %s\n", s.name, s.what);
+        return 0;
+    }
+    if (o.dataDir.empty()) {
+        const char* env = std::getenv("VKAS_BENCH_DATA");
+        const char* cache = std::getenv("XDG_CACHE_HOME");
+        const char* home = std::getenv("HOME");
+        o.dataDir = env ? env : cache ? std::string(cache) + "/vkas-bench" : std::string(home ? home : ".") + "/.cache/vkas-bench";
+    }
+    if (o.rays == 0) o.rays = o.quick ? (1u << 15) : (1u << 20);
+    if (o.reps == 0) o.reps = o.quick ? 1 : 3;
+    if (o.instances == 0) o.instances = o.quick ? 1024 : 10000;
+    if (o.threadsList.empty()) o.threadsList = o.quick ? "1,2" : "1,2,4,8,16";
+    if (o.scalingScene.empty()) o.scalingScene = o.quick ? "bunny" : "bunny-4m";
+    if (o.scenes.empty() && o.meshes.empty()) {
+        if (o.quick) o.scenes = {"bunny", "instances"};
+        else
+            for (const SceneInfo& s : sceneCatalogue()) o.scenes.push_back(s.name);
+    }
+    std::vector<unsigned> threadCounts;
+    {
+        std::stringstream ss(o.threadsList);
+        std::string item;
+        while (std::getline(ss, item, ',')) threadCounts.push_back(unsigned(std::stoul(item)));
+    }
+
+    std::printf("vkas_bench_embree: vkas %d.%d.%d against Embree %d.%d.%d; %u hardware threads; all-threads runs on %u; "
+                "%zu rays per kind; best of %d%s\n",
+                VKAS_VERSION_MAJOR, VKAS_VERSION_MINOR, VKAS_VERSION_PATCH, RTC_VERSION_MAJOR, RTC_VERSION_MINOR,
+                RTC_VERSION_PATCH, std::thread::hardware_concurrency(), o.threads, o.rays, o.reps, o.quick ? " (--quick)" : "");
+    std::printf("builds on one thread (vkas: no deferral; Embree: threads=1); ratios are vkas / Embree (speed: Embree ms / vkas ms)\n");
+    Bench bench(o);
+    Json& j = bench.json;
+    j.begin(nullptr, '{').field("vkas_version", std::to_string(VKAS_VERSION_MAJOR) + "." + std::to_string(VKAS_VERSION_MINOR));
+    j.field("embree_version", std::to_string(RTC_VERSION_MAJOR) + "." + std::to_string(RTC_VERSION_MINOR) + "." +
+                                  std::to_string(RTC_VERSION_PATCH));
+    j.field("hardware_threads", double(std::thread::hardware_concurrency())).field("threads", double(o.threads));
+    j.field("rays_per_kind", double(o.rays)).field("reps", double(o.reps)).field("quick", o.quick);
+    int status = 0;
+    try {
+        j.begin("scenes", '[');
+        for (const std::string& s : o.scenes) bench.runScene(makeScene(s, false, o.dataDir, o.instances));
+        for (const std::string& m : o.meshes) bench.runScene(makeScene(m, true, o.dataDir, o.instances));
+        j.end(']');
+        if (!o.noScaling) bench.runScaling(makeScene(o.scalingScene, false, o.dataDir, o.instances), threadCounts);
+    } catch (const std::exception& e) {
+        std::fprintf(stderr, "vkas_bench_embree: %s\n", e.what());
+        return 1;
+    }
+    std::printf("\ntargets (issue 7)%s:\n", o.quick ? " -- a --quick run is a smoke test, not a measurement" : "");
+    j.begin("targets", '[');
+    size_t missed = 0;
+    for (const Target& t : bench.targets) {
+        const bool met = t.higherIsBetter ? t.value >= t.goal : t.value <= t.goal;
+        missed += !met;
+        char verdict[96];
+        if (met) std::snprintf(verdict, sizeof verdict, "met");
+        else if (t.higherIsBetter) std::snprintf(verdict, sizeof verdict, "MISSED by %.0f%% (needs %.2fx more)", 100 * (1 - t.value / t.goal), t.goal / t.value);
+        else std::snprintf(verdict, sizeof verdict, "MISSED by %.0f%%", 100 * (t.value / t.goal - 1));
+        std::printf("  %-14s %-68s %7.2f (goal %s%.2f)  %s\n", t.scene.c_str(), t.what.c_str(), t.value,
+                    t.higherIsBetter ? ">=" : "<=", t.goal, verdict);
+        j.begin(nullptr, '{').field("scene", t.scene).field("target", t.what).field("value", t.value).field("goal", t.goal);
+        j.field("higher_is_better", t.higherIsBetter).field("met", met).end('}');
+    }
+    j.end(']').end('}');
+    std::printf("  %zu of %zu targets missed\n", missed, bench.targets.size());
+    if (!o.json.empty()) {
+        std::ofstream(o.json) << j.str() << "\n";
+        std::printf("JSON written to %s\n", o.json.c_str());
+    }
+    return status;
+}

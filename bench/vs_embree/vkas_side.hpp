@@ -1,0 +1,73 @@
+// The vkas side: builds through vkBuildAccelerationStructuresKHR (optionally deferred and joined by N threads),
+// refits, the compacted-size query, the structure's bytes for the SAH cost, and traversal through vkasTraceRays and
+// the vkasRayQuery* functions. Validation is off (disableValidation), as in a release application.
+#pragma once
+
+#include "common.hpp"
+#include "sah.hpp"
+
+namespace vb {
+
+class VkasEngine {
+public:
+    struct Structure {
+        VkAccelerationStructureKHR as = VK_NULL_HANDLE;
+        VkBuffer buffer = VK_NULL_HANDLE;
+        VkDeviceMemory memory = VK_NULL_HANDLE;
+    };
+    struct Build {
+        Structure s;
+        double ms = 0;               // best of the repetitions
+        uint64_t compactedSize = 0;  // vkWriteAccelerationStructuresPropertiesKHR, COMPACTED_SIZE
+    };
+
+    explicit VkasEngine(uint32_t workerThreadCount);  // 0: all cores (vkasTraceRays' worker threads)
+    ~VkasEngine();
+    VkasEngine(const VkasEngine&) = delete;
+    VkasEngine& operator=(const VkasEngine&) = delete;
+
+    // A bottom level of the mesh (one opaque geometry), with `flags` | ALLOW_COMPACTION (which changes nothing in
+    // vkas's builder; the compacted-size query needs it). deferredThreads 0: no deferral; N: a deferred operation
+    // joined by N threads. `vertices` overrides the mesh's positions (same layout).
+    Build buildBottom(const Mesh& mesh, VkBuildAccelerationStructureFlagsKHR flags, int reps,
+                      unsigned deferredThreads = 0);
+    // A top level of `xs` instances of `blas` (an identity instance when xs is empty).
+    Build buildTop(const std::vector<Transform>& xs, VkAccelerationStructureKHR blas,
+                   VkBuildAccelerationStructureFlagsKHR flags, int reps);
+    // In-place refits (MODE_UPDATE) of a structure built with ALLOW_UPDATE, alternating between `moved` and the
+    // original inputs, `moved` first and last; returns the best time.
+    double refitBottom(const Structure& s, const Mesh& mesh, const std::vector<float>& moved,
+                       VkBuildAccelerationStructureFlagsKHR flags, int reps);
+    double refitTop(const Structure& s, const std::vector<Transform>& xs, const std::vector<Transform>& moved,
+                    VkAccelerationStructureKHR blas, VkBuildAccelerationStructureFlagsKHR flags, int reps);
+
+    SahCost sah(const Structure& s);
+    void destroy(Structure& s);
+
+    // Batch traversal on the device's worker threads; returns the best time of `reps` calls.
+    double traceBatch(VkAccelerationStructureKHR tlas, bool anyHit, const std::vector<VkasRay>& rays,
+                      std::vector<Hit>& hits, int reps);
+    // Ray queries on the calling thread, one after another; returns the best time.
+    double traceRayQuery(VkAccelerationStructureKHR tlas, bool anyHit, const std::vector<VkasRay>& rays,
+                         std::vector<Hit>& hits, int reps);
+
+private:
+    Structure create(VkAccelerationStructureTypeKHR type, VkDeviceSize size);
+    double run(const VkAccelerationStructureBuildGeometryInfoKHR& info, const VkAccelerationStructureBuildRangeInfoKHR& range,
+               unsigned deferredThreads);
+    uint64_t compactedSize(const Structure& s);
+
+    VkDevice dev_ = VK_NULL_HANDLE;
+    std::vector<unsigned char> scratch_;
+#define VB_VKAS_COMMANDS(X)                                                                                        \
+    X(vkCreateBuffer) X(vkGetBufferMemoryRequirements) X(vkAllocateMemory) X(vkBindBufferMemory) X(vkMapMemory)    \
+    X(vkUnmapMemory) X(vkGetAccelerationStructureBuildSizesKHR) X(vkCreateAccelerationStructureKHR)                \
+    X(vkBuildAccelerationStructuresKHR) X(vkWriteAccelerationStructuresPropertiesKHR)                             \
+    X(vkCreateDeferredOperationKHR) X(vkDeferredOperationJoinKHR) X(vkGetDeferredOperationResultKHR)               \
+    X(vkDestroyDeferredOperationKHR) X(vkDestroyAccelerationStructureKHR) X(vkDestroyBuffer) X(vkFreeMemory)
+#define VB_DECLARE(name) PFN_##name name = nullptr;
+    VB_VKAS_COMMANDS(VB_DECLARE)
+#undef VB_DECLARE
+};
+
+}  // namespace vb
