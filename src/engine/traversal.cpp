@@ -66,8 +66,9 @@ void push(RayQueryState& q, ChildRef ref, float dist) {
     }
 }
 
-// Distances at which the ray enters each child box (+inf where it misses), 4 or 8 lanes at a time.
-void childEntryDistances(const Node& node, const ShearedRay& r, float tMin, float tMax, float out[kNodeWidth]) {
+// Distances at which the ray enters each child box (+inf where it misses), 4 or 8 lanes at a time. Returns the
+// mask of the children hit (bit i: child i).
+uint32_t childEntryDistances(const Node& node, const ShearedRay& r, float tMin, float tMax, float out[kNodeWidth]) {
     // Near and far planes per axis, chosen by the sign of the direction. Empty slots (lower +inf, upper -inf)
     // and NaN products (a zero direction component on a box plane) fall out of the comparisons below: NaN is
     // never taken as a bound, so such a slab does not constrain the interval.
@@ -83,6 +84,7 @@ void childEntryDistances(const Node& node, const ShearedRay& r, float tMin, floa
     const __m128 ix = _mm_set1_ps(r.invDir[0]), iy = _mm_set1_ps(r.invDir[1]), iz = _mm_set1_ps(r.invDir[2]);
     const __m128 lo = _mm_set1_ps(tMin), hi = _mm_set1_ps(tMax), slack = _mm_set1_ps(kFarSlack);
     const __m128 inf = _mm_set1_ps(INFINITY);
+    uint32_t mask = 0;
     for (uint32_t k = 0; k < kNodeWidth; k += 4) {
         // _mm_max_ps(v, acc) returns acc when v is NaN: the NaN-ignoring max the scalar code spells out.
         __m128 tNear = _mm_max_ps(_mm_mul_ps(_mm_sub_ps(_mm_load_ps(nearX + k), ox), ix), lo);
@@ -93,8 +95,11 @@ void childEntryDistances(const Node& node, const ShearedRay& r, float tMin, floa
         tFar = _mm_min_ps(_mm_mul_ps(_mm_sub_ps(_mm_load_ps(farZ + k), oz), iz), tFar);
         __m128 hit = _mm_cmple_ps(tNear, _mm_mul_ps(tFar, slack));
         _mm_storeu_ps(out + k, _mm_or_ps(_mm_and_ps(hit, tNear), _mm_andnot_ps(hit, inf)));
+        mask |= uint32_t(_mm_movemask_ps(hit)) << k;
     }
+    return mask;
 #else
+    uint32_t mask = 0;
     for (uint32_t i = 0; i < kNodeWidth; ++i) {
         float tNear = maxNoNan(tMin, (nearX[i] - r.org[0]) * r.invDir[0]);
         tNear = maxNoNan(tNear, (nearY[i] - r.org[1]) * r.invDir[1]);
@@ -103,18 +108,22 @@ void childEntryDistances(const Node& node, const ShearedRay& r, float tMin, floa
         tFar = minNoNan(tFar, (farY[i] - r.org[1]) * r.invDir[1]);
         tFar = minNoNan(tFar, (farZ[i] - r.org[2]) * r.invDir[2]);
         out[i] = tNear <= tFar * kFarSlack ? tNear : INFINITY;
+        if (out[i] != INFINITY) mask |= 1u << i;
     }
+    return mask;
 #endif
 }
 
 // Tests the children of one node and pushes the hit ones, farthest first so the nearest is popped next.
 void visitNode(RayQueryState& q, const Node& node, const ShearedRay& r) {
     float entry[kNodeWidth];
-    childEntryDistances(node, r, q.tMin, q.tMax, entry);
+    // Only the children hit are visited, in slot order (bit scan), so the branches follow the hits, not the slots.
+    uint32_t mask = childEntryDistances(node, r, q.tMin, q.tMax, entry);
     float dist[kNodeWidth];
     ChildRef ref[kNodeWidth];
     uint32_t hits = 0;
-    for (uint32_t i = 0; i < kNodeWidth; ++i) {
+    for (; mask != 0; mask &= mask - 1) {
+        const uint32_t i = uint32_t(__builtin_ctz(mask));
         if (entry[i] == INFINITY || node.child[i] == kEmptyRef) continue;
         const float tNear = entry[i];
         uint32_t k = hits++;  // insertion by descending distance
