@@ -285,7 +285,8 @@ VkResult buildBottomLevel(const BuildJob& job) {
                            : gatherTriangles(job, refs, reinterpret_cast<TriangleRecord*>(temp));
     StructureLayout pre = structureLayout(StructureType::BottomLevel, info.geometryCount, 0, 0);
     auto* nodes = reinterpret_cast<Node*>(job.dst + pre.nodeOffset);
-    BvhBuildResult tree = buildWideBvh(refs, n, {maxLeafSize(StructureType::BottomLevel)}, nodes, job.parallel);
+    const BvhBuildSettings settings = buildSettingsFor(maxLeafSize(StructureType::BottomLevel), info.flags);
+    BvhBuildResult tree = buildWideBvh(refs, n, settings, nodes, job.parallel);
     StructureLayout layout =
         structureLayout(StructureType::BottomLevel, info.geometryCount, tree.nodeCount, n, motion);
     std::byte* records = job.dst + layout.recordOffset;
@@ -340,7 +341,8 @@ VkResult buildMotionTopLevel(const BuildJob& job) {
     }
     StructureLayout pre = structureLayout(StructureType::TopLevel, info.geometryCount, 0, 0, true);
     auto* nodes = reinterpret_cast<Node*>(job.dst + pre.nodeOffset);
-    BvhBuildResult tree = buildWideBvh(refs, n, {maxLeafSize(StructureType::TopLevel)}, nodes, job.parallel);
+    const BvhBuildSettings settings = buildSettingsFor(maxLeafSize(StructureType::TopLevel), info.flags);
+    BvhBuildResult tree = buildWideBvh(refs, n, settings, nodes, job.parallel);
     StructureLayout layout = structureLayout(StructureType::TopLevel, info.geometryCount, tree.nodeCount, n, true);
     auto* records = reinterpret_cast<MotionInstanceRecord*>(job.dst + layout.recordOffset);
     for (uint32_t i = 0; i < n; ++i) records[i] = temp[refs[i].index];
@@ -381,7 +383,8 @@ VkResult buildTopLevel(const BuildJob& job) {
     }
     StructureLayout pre = structureLayout(StructureType::TopLevel, info.geometryCount, 0, 0);
     auto* nodes = reinterpret_cast<Node*>(job.dst + pre.nodeOffset);
-    BvhBuildResult tree = buildWideBvh(refs, n, {maxLeafSize(StructureType::TopLevel)}, nodes, job.parallel);
+    const BvhBuildSettings settings = buildSettingsFor(maxLeafSize(StructureType::TopLevel), info.flags);
+    BvhBuildResult tree = buildWideBvh(refs, n, settings, nodes, job.parallel);
     StructureLayout layout = structureLayout(StructureType::TopLevel, info.geometryCount, tree.nodeCount, n);
     auto* records = reinterpret_cast<InstanceRecord*>(job.dst + layout.recordOffset);
     for (uint32_t i = 0; i < n; ++i) records[i] = temp[refs[i].index];

@@ -1,5 +1,7 @@
 #include "engine/bvh_builder.hpp"
 
+#include <vulkan/vulkan_core.h>
+
 #include "engine/box4.hpp"
 
 #include <algorithm>
@@ -11,6 +13,15 @@ namespace vkas {
 
 using format::ChildRef;
 using format::Node;
+
+BvhBuildSettings buildSettingsFor(uint32_t maxLeafSize, uint32_t buildFlags) {
+    BvhBuildSettings s{maxLeafSize};
+    if (buildFlags & VK_BUILD_ACCELERATION_STRUCTURE_PREFER_FAST_BUILD_BIT_KHR) {
+        s.binCount = 8;
+        s.largestAxisOnly = true;
+    }
+    return s;
+}
 
 uint64_t maxWideNodeCount(uint64_t n, uint32_t maxLeafSize) {
     if (n <= maxLeafSize) return 0;
@@ -189,9 +200,19 @@ private:
             return halve(r, left, right);
         }
         // Few primitives need few bins: clearing and sweeping 32 bins would cost more than binning them.
-        const int binCount = int(std::min<uint32_t>(kBins, std::max<uint32_t>(4, r.count())));
-        float scale[3];
-        for (int a = 0; a < 3; ++a) scale[a] = extent[a] > 0 ? (float(binCount) * 0.99999f) / extent[a] : 0.0f;
+        const int binCount =
+            int(std::min<uint32_t>(std::min<uint32_t>(kBins, settings_.binCount), std::max<uint32_t>(4, r.count())));
+        // The axes binned: all three, or only the one of the largest centroid extent.
+        int axes[3] = {0, 1, 2}, axisCount = 3;
+        if (settings_.largestAxisOnly) {
+            axes[0] = extent.x >= extent.y && extent.x >= extent.z ? 0 : extent.y >= extent.z ? 1 : 2;
+            axisCount = 1;
+        }
+        float scale[3] = {0.0f, 0.0f, 0.0f};
+        for (int k = 0; k < axisCount; ++k) {
+            const int a = axes[k];
+            scale[a] = extent[a] > 0 ? (float(binCount) * 0.99999f) / extent[a] : 0.0f;
+        }
         const __m128 origin = _mm_set_ps(0.0f, cl.z, cl.y, cl.x);
         const __m128 scale4 = _mm_set_ps(0.0f, scale[2], scale[1], scale[0]);
         const __m128 lastBin = _mm_set1_ps(float(binCount - 1));
@@ -215,9 +236,9 @@ private:
                     alignas(16) int b0[4], b1[4];
                     _mm_store_si128(reinterpret_cast<__m128i*>(b0), binsOf(lo0, up0));
                     _mm_store_si128(reinterpret_cast<__m128i*>(b1), binsOf(lo1, up1));
-                    for (int a = 0; a < 3; ++a) {
-                        local.add(a, b0[a], lo0, up0);
-                        odd.add(a, b1[a], lo1, up1);
+                    for (int k = 0; k < axisCount; ++k) {
+                        local.add(axes[k], b0[axes[k]], lo0, up0);
+                        odd.add(axes[k], b1[axes[k]], lo1, up1);
                     }
                 }
                 local.merge(odd);
@@ -227,12 +248,13 @@ private:
                 load(refs_[i], lo, up);
                 alignas(16) int b[4];
                 _mm_store_si128(reinterpret_cast<__m128i*>(b), binsOf(lo, up));
-                for (int a = 0; a < 3; ++a) local.add(a, b[a], lo, up);
+                for (int k = 0; k < axisCount; ++k) local.add(axes[k], b[axes[k]], lo, up);
             }
         }, bins, Bins(binCount));
         float bestCost = std::numeric_limits<float>::infinity();
         int bestAxis = -1, bestBin = -1;
-        for (int a = 0; a < 3; ++a) {
+        for (int k = 0; k < axisCount; ++k) {
+            const int a = axes[k];
             if (scale[a] == 0.0f) continue;
             float rightArea[kBins];
             uint32_t rightCount[kBins];
