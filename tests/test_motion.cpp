@@ -745,3 +745,43 @@ TEST_F(MotionTest, BuildValidation) {
 }
 
 }  // namespace
+
+// A motion triangle that is a line at the ray time is never hit, even by a ray through that line: rounding can
+// give the flat triangle a non-zero determinant. The build keeps it (it could be a triangle at other times), so
+// traversal checks at the ray time. Found with VKAS_TEST_SEED=2613435041640896241 of MotionTrianglesFormatsAndIndexing.
+TEST_F(MotionTest, DegenerateAtTheRayTimeIsNeverHit) {
+    Mesh line;  // three collinear vertices (y = 1, z = 0), at both times
+    line.positions = {{-0.172108615f, 1.0f, 0.0f}, {-0.0731271428f, 1.0f, 0.0f}, {0.127118342f, 1.0f, 0.0f}};
+    line.indices = {0, 1, 2};
+    Mesh moving = line;  // collinear only at time 0.5: vertex 1 moves from y = 1.5 to y = 0.5
+    moving.positions[1] = {-0.0731271428f, 1.5f, 0.0f};
+    std::vector<Float3> movingAt1 = moving.positions;
+    movingAt1[1] = {-0.0731271428f, 0.5f, 0.0f};
+    GeometryLayout L;
+    L.format = VK_FORMAT_R32G32B32_SFLOAT;
+    auto flat = makeMotionGeometry(line, line.positions, L, rng);
+    auto crossing = makeMotionGeometry(moving, movingAt1, L, rng);
+    for (const MotionGeometry* g : {flat.get(), crossing.get()}) {
+        const AccelStruct* blas = buildMotionBlas({g});
+        MotionInstanceDesc d;
+        d.blas = blas;
+        oracle::MotionScene scene;
+        const AccelStruct* tlas = buildMotionTlas({d}, false, scene);
+        // Rays through random points of the line, from random directions: rounding gives some of them a non-zero
+        // determinant, which used to make a hit.
+        for (int k = 0; k < 2000; ++k) {
+            const float time = g == crossing.get() ? 0.5f : rng.uniformf(0, 1);
+            const float u = rng.uniformf(0.05f, 0.95f);
+            const float at[3] = {line.positions[0][0] + u * (line.positions[2][0] - line.positions[0][0]), 1.0f, 0.0f};
+            float direction[3];
+            for (float& c : direction) c = rng.uniformf(-1, 1);
+            const float origin[3] = {at[0] - 2 * direction[0], at[1] - 2 * direction[1], at[2] - 2 * direction[2]};
+            VkasRayQuery q;
+            vkasRayQueryInitializeMotion(&q, tlas->handle, 0, 0xFF, origin, 0.0f, direction, INFINITY, time);
+            while (vkasRayQueryProceed(&q)) vkasRayQueryConfirmIntersection(&q);
+            ASSERT_EQ(vkasRayQueryGetIntersectionType(&q, VK_TRUE), uint32_t(VKAS_COMMITTED_INTERSECTION_NONE))
+                << (g == flat.get() ? "the line" : "the triangle that is a line at time 0.5") << " at time " << time
+                << ", ray " << k;
+        }
+    }
+}

@@ -4,6 +4,7 @@
 #include <cstring>
 
 #include "engine/aabb_intersect.hpp"
+#include "engine/geometry_fetch.hpp"
 #include "engine/motion.hpp"
 #include "engine/lss_intersect.hpp"
 #include "engine/sphere_intersect.hpp"
@@ -258,6 +259,9 @@ bool visitMotionTriangleLeaf(RayQueryState& q) {
         float v[3][3];
         for (int j = 0; j < 3; ++j)
             for (int c = 0; c < 3; ++c) v[j][c] = motion::lerp(rec.base.v[j][c], rec.v1[j][c], q.time);
+        // Degenerate at the ray time (a line or a point): never hit. The build keeps such triangles (they may be
+        // degenerate at some times only), and a ray through the line can get a non-zero determinant from rounding.
+        if (isDegenerateTriangle(v)) continue;
         if (testTriangle(q, rec.base, v) == TriangleOutcome::Candidate) return true;
         if (q.done) return false;
     }
