@@ -7,6 +7,7 @@
 #include "api/device.hpp"
 #include "api/guard.hpp"
 #include "api/validation.hpp"
+#include "engine/trace_kernel.hpp"
 #include "engine/traversal.hpp"
 
 namespace vkas {
@@ -18,8 +19,7 @@ namespace {
 
 constexpr uint32_t kRaysPerTask = 256;
 
-void writeHit(const vkas::RayQueryState& q, VkasHit& out) {
-    const vkas::QueryHit& h = q.committed;
+void writeHit(const vkas::QueryHit& h, VkasHit& out) {
     out.type = h.type;
     out.t = h.t;
     if (h.type == vkas::kCommittedNone) {
@@ -126,14 +126,29 @@ VkResult traceBatch(VkDevice device, VkAccelerationStructureKHR topLevel, VkasTr
                            (mode == VKAS_TRACE_MODE_ANY_HIT ? VKAS_RAY_FLAG_TERMINATE_ON_FIRST_HIT : 0u);
     const uint64_t tasks = (uint64_t(rayCount) + kRaysPerTask - 1) / kRaysPerTask;
     dev->workers().parallelFor(tasks, [&](uint64_t task) {
-        auto q = std::make_unique<vkas::RayQueryState>();  // 11 KiB: kept off small worker stacks
+        // Without an intersection callback the batch kernel traces the rays; a ray it does not cover (motion,
+        // spheres, LSS) and every ray of vkasTraceRaysProcedural run as ray queries. Both give the same hits.
+        std::unique_ptr<vkas::KernelScratch> scratch;  // 11 KiB each: kept off small worker stacks
+        std::unique_ptr<vkas::RayQueryState> q;
+        if (!intersect) scratch = std::make_unique<vkas::KernelScratch>();
         uint64_t end = std::min<uint64_t>(rayCount, (task + 1) * kRaysPerTask);
         for (uint64_t i = task * kRaysPerTask; i < end; ++i) {
             const VkasRay& r = pRays[i];
+            if (scratch) {
+                const vkas::KernelRay ray{{r.origin[0], r.origin[1], r.origin[2]},
+                                          {r.direction[0], r.direction[1], r.direction[2]},
+                                          r.tMin, r.tMax, flags, cullMask};
+                vkas::QueryHit hit;
+                if (vkas::traceKernel(block, vkas::resolveAccelerationStructure, ray, *scratch, hit)) {
+                    writeHit(hit, pHits[i]);
+                    continue;
+                }
+            }
+            if (!q) q = std::make_unique<vkas::RayQueryState>();
             vkas::queryInitialize(*q, block, vkas::resolveAccelerationStructure, flags, cullMask, r.origin, r.tMin,
                                   r.direction, r.tMax);
             runQuery(*q, uint32_t(i), intersect, userData);
-            writeHit(*q, pHits[i]);
+            writeHit(q->committed, pHits[i]);
         }
     });
     return VK_SUCCESS;

@@ -34,6 +34,8 @@ uint64_t maxWideNodeCount(uint64_t n, uint32_t maxLeafSize) {
 namespace {
 
 constexpr int kBins = 32;
+// Ranges of at least this many primitives are partitioned stably through a spare array (WideBuilder::stablePartition).
+constexpr uint32_t kStablePartitionMin = 65536;
 
 struct Range {
     uint32_t begin = 0, end = 0;
@@ -51,12 +53,19 @@ inline Vec3 refCentroid2(const PrimRef& r) {
 
 class WideBuilder {
 public:
+    // Writes the nodes straight to `nodes` (a serial build: the destination, which the size query's bound fits).
     WideBuilder(PrimRef* refs, const BvhBuildSettings& s, Node* nodes, const ParallelFor* parallel = nullptr)
         : refs_(refs), settings_(s), nodes_(nodes), parallel_(parallel) {}
+    // Appends the nodes to `nodes` (a part of a parallel build: its node count is known only at the end, and a
+    // worst-case array would cost more to allocate and clear than building the part).
+    WideBuilder(PrimRef* refs, const BvhBuildSettings& s, std::vector<Node>* nodes, const ParallelFor* parallel = nullptr)
+        : refs_(refs), settings_(s), nodes_(nullptr), growing_(nodes), parallel_(parallel) {}
 
     // With a deferral threshold, ranges of at most that many primitives (but more than a leaf) are not built:
     // they are recorded in deferred() and their place is a placeholder reference, deferredRef(k).
     void deferRangesUpTo(uint32_t threshold) { deferThreshold_ = threshold; }
+    // Gives large ranges a buffer of as many refs as the build has (see stablePartition).
+    void useSpare(PrimRef* spare) { spare_ = spare; }
     const std::vector<Range>& deferred() const { return deferred_; }
     static constexpr uint64_t kDeferredKind = 3;  // a ChildRef kind the format never uses
     static ChildRef deferredRef(uint64_t k) { return (kDeferredKind << format::kKindShift) | k; }
@@ -69,6 +78,7 @@ public:
             return deferredRef(deferred_.size() - 1);
         }
         uint32_t index = nodeCount_++;
+        if (growing_) growing_->emplace_back();
         Range children[format::kNodeWidth];
         uint32_t n = 1;
         children[0] = r;
@@ -106,7 +116,7 @@ public:
             node.upperX[i] = b.upper.x, node.upperY[i] = b.upper.y, node.upperZ[i] = b.upper.z;
             node.child[i] = build(children[i]);
         }
-        nodes_[index] = node;
+        (growing_ ? (*growing_)[index] : nodes_[index]) = node;
         return format::makeInternalRef(index);
     }
 
@@ -295,6 +305,7 @@ private:
             const __m128 c = _mm_add_ps(lo, up);
             side.centroids.extend(c, c);
         };
+        if (spare_ && r.count() >= kStablePartitionMin) return stablePartition(r, goesLeft, add, left, right);
         uint32_t i = r.begin, j = r.end;
         for (;;) {
             __m128 lo, up;
@@ -326,58 +337,87 @@ private:
         right.bounds = rb.bounds.aabb(), right.centroids = rb.centroids.aabb();
     }
 
+    static constexpr uint32_t kPartitionChunk = 16384;
+
+    template <typename Fn>
+    void runChunks(uint32_t chunks, const Fn& fn) {
+        if (parallel_ && chunks > 1)
+            (*parallel_)(chunks, fn);
+        else
+            for (uint32_t c = 0; c < chunks; ++c) fn(c);
+    }
+
+    // A large range is partitioned stably (each side keeps its order) through the spare array, in fixed chunks that
+    // threads can share: the order depends on the chunks, never on the threads, and the top of the tree, where every
+    // range is large, is not serial. spare_[i] is only used for i in the range: disjoint ranges never collide.
+    template <typename GoesLeft, typename Add>
+    void stablePartition(const Range& r, const GoesLeft& goesLeft, const Add& add, Range& left, Range& right) {
+        const uint32_t chunks = (r.count() + kPartitionChunk - 1) / kPartitionChunk;
+        struct Side {
+            uint32_t leftCount = 0, leftAt = 0, rightAt = 0;
+            RangeBounds lb, rb;
+        };
+        std::vector<Side> sides(chunks);
+        auto chunkBegin = [&](uint32_t c) { return r.begin + c * kPartitionChunk; };
+        auto chunkEnd = [&](uint32_t c) { return std::min(r.end, r.begin + (c + 1) * kPartitionChunk); };
+        runChunks(chunks, [&](uint32_t c) {
+            Side& side = sides[c];
+            for (uint32_t i = chunkBegin(c); i < chunkEnd(c); ++i) {
+                __m128 lo, up;
+                load(refs_[i], lo, up);
+                if (goesLeft(lo, up)) {
+                    add(side.lb, lo, up);
+                    ++side.leftCount;
+                } else {
+                    add(side.rb, lo, up);
+                }
+            }
+        });
+        uint32_t leftTotal = 0;
+        for (Side& side : sides) side.leftAt = r.begin + leftTotal, leftTotal += side.leftCount;
+        uint32_t rightAt = r.begin + leftTotal;
+        for (uint32_t c = 0; c < chunks; ++c) {
+            sides[c].rightAt = rightAt;
+            rightAt += (chunkEnd(c) - chunkBegin(c)) - sides[c].leftCount;
+        }
+        runChunks(chunks, [&](uint32_t c) {
+            uint32_t l = sides[c].leftAt, rr = sides[c].rightAt;
+            for (uint32_t i = chunkBegin(c); i < chunkEnd(c); ++i) {
+                __m128 lo, up;
+                load(refs_[i], lo, up);
+                spare_[goesLeft(lo, up) ? l++ : rr++] = refs_[i];
+            }
+        });
+        runChunks(chunks, [&](uint32_t c) {
+            std::copy(spare_ + chunkBegin(c), spare_ + chunkEnd(c), refs_ + chunkBegin(c));
+        });
+        RangeBounds lb, rb;
+        for (const Side& side : sides) lb.merge(side.lb), rb.merge(side.rb);
+        left.begin = r.begin, left.end = r.begin + leftTotal;
+        right.begin = left.end, right.end = r.end;
+        left.depth = right.depth = r.depth + 1;
+        left.bounds = lb.bounds.aabb(), left.centroids = lb.centroids.aabb();
+        right.bounds = rb.bounds.aabb(), right.centroids = rb.centroids.aabb();
+    }
+
     PrimRef* refs_;
+    PrimRef* spare_ = nullptr;  // as many as refs_: the buffer of stablePartition
     BvhBuildSettings settings_;
     Node* nodes_;
+    std::vector<Node>* growing_ = nullptr;
     const ParallelFor* parallel_;  // for binning and bounds of large ranges
     uint32_t nodeCount_ = 0;
     uint32_t deferThreshold_ = 0;
     std::vector<Range> deferred_;
 };
 
-// A subtree built on its own: its nodes in pre-order from local index 0, and its root reference.
+// A part of a parallel build: its own nodes in pre-order from local index 0 (placeholders, WideBuilder::deferredRef(k),
+// stand for parts[k]), its root reference, and how many nodes it holds with its parts.
 struct Subtree {
     ChildRef root = format::kEmptyRef;
     std::vector<Node> nodes;
-};
-
-// Lays out a top part (built with placeholders) and the separately built subtrees in the serial build's order:
-// pre-order, a node's index before its children's subtrees, children in slot order.
-class Assembler {
-public:
-    Assembler(const Node* top, const std::vector<Subtree>& subtrees, Node* out)
-        : top_(top), subtrees_(subtrees), out_(out) {}
-
-    ChildRef place(ChildRef ref) {
-        if (WideBuilder::isDeferred(ref)) return placeSubtree(subtrees_[uint32_t(ref & 0xFFFF'FFFFu)]);
-        if (!format::isInternal(ref)) return ref;
-        const uint32_t index = next_++;
-        Node node = top_[format::nodeIndex(ref)];
-        for (uint32_t i = 0; i < format::kNodeWidth; ++i)
-            if (node.child[i] != format::kEmptyRef) node.child[i] = place(node.child[i]);
-        out_[index] = node;
-        return format::makeInternalRef(index);
-    }
-    uint32_t nodeCount() const { return next_; }
-
-private:
-    // A subtree's nodes are already in pre-order: shift them as one block.
-    ChildRef placeSubtree(const Subtree& sub) {
-        if (!format::isInternal(sub.root)) return sub.root;
-        const uint32_t base = next_;
-        for (const Node& n : sub.nodes) {
-            Node node = n;
-            for (ChildRef& c : node.child)
-                if (format::isInternal(c)) c = format::makeInternalRef(format::nodeIndex(c) + base);
-            out_[next_++] = node;
-        }
-        return format::makeInternalRef(base + format::nodeIndex(sub.root));
-    }
-
-    const Node* top_;
-    const std::vector<Subtree>& subtrees_;
-    Node* out_;
-    uint32_t next_ = 0;
+    std::vector<Subtree> parts;
+    uint64_t totalNodes = 0;
 };
 
 // Ranges at or below this many primitives become independent tasks: large enough to amortise a task, small
@@ -385,30 +425,72 @@ private:
 constexpr uint32_t kParallelGrain = 2048;
 
 // Builds the tree over r in parallel: the first node (and any child range over half of r) here, each other child
-// range as a task that does the same, down to kParallelGrain; then lays it all out as the serial build would.
-void buildSubtree(PrimRef* refs, const Range& r, const BvhBuildSettings& settings, const ParallelFor& parallel,
-                  Subtree& out) {
+// range as a task that does the same, down to kParallelGrain.
+void buildSubtree(PrimRef* refs, PrimRef* spare, const Range& r, const BvhBuildSettings& settings,
+                  const ParallelFor& parallel, Subtree& out) {
     if (r.count() <= kParallelGrain) {
-        out.nodes.resize(size_t(maxWideNodeCount(r.count(), settings.maxLeafSize)));
-        WideBuilder builder(refs, settings, out.nodes.data());
+        out.nodes.reserve(r.count() / 8 + 4);
+        WideBuilder builder(refs, settings, &out.nodes);
         out.root = builder.build(r);
-        out.nodes.resize(builder.nodeCount());
+        out.totalNodes = out.nodes.size();
         return;
     }
-    std::vector<Node> top(size_t(maxWideNodeCount(r.count(), settings.maxLeafSize)));
-    WideBuilder topBuilder(refs, settings, top.data(), &parallel);
+    WideBuilder topBuilder(refs, settings, &out.nodes, &parallel);
+    topBuilder.useSpare(spare);
     topBuilder.deferRangesUpTo(std::max(kParallelGrain, r.count() / 2));
-    const ChildRef topRoot = topBuilder.build(r);
+    out.root = topBuilder.build(r);
     const std::vector<Range>& ranges = topBuilder.deferred();
-    std::vector<Subtree> subtrees(ranges.size());
+    out.parts.resize(ranges.size());
     parallel(uint32_t(ranges.size()),
-             [&](uint32_t k) { buildSubtree(refs, ranges[k], settings, parallel, subtrees[k]); });
-    size_t total = topBuilder.nodeCount();
-    for (const Subtree& sub : subtrees) total += sub.nodes.size();
-    out.nodes.resize(total);
-    Assembler assembler(top.data(), subtrees, out.nodes.data());
-    out.root = assembler.place(topRoot);
+             [&](uint32_t k) { buildSubtree(refs, spare, ranges[k], settings, parallel, out.parts[k]); });
+    out.totalNodes = out.nodes.size();
+    for (const Subtree& part : out.parts) out.totalNodes += part.totalNodes;
 }
+
+// Lays out a parallel build's parts as the serial build would: pre-order, a node's index before its children's
+// subtrees, children in slot order. A part's own nodes are few (the top of its range); its parts' places follow
+// from their node counts, so they are laid out in parallel, each node copied once, straight to the destination.
+class Assembler {
+public:
+    Assembler(Node* out, const ParallelFor& parallel) : out_(out), parallel_(parallel) {}
+
+    // Places `sub` with its first node at index `base`; returns its root reference.
+    ChildRef place(const Subtree& sub, uint32_t base) {
+        Placement p{sub, base, {}};
+        const ChildRef root = placeNode(p, sub.root);
+        parallel_(uint32_t(p.parts.size()), [&](uint32_t k) { place(sub.parts[p.parts[k].first], p.parts[k].second); });
+        return root;
+    }
+
+private:
+    struct Placement {
+        const Subtree& sub;
+        uint32_t next;                                    // the next free node index
+        std::vector<std::pair<uint32_t, uint32_t>> parts;  // (part, base) to place afterwards
+    };
+
+    ChildRef placeNode(Placement& p, ChildRef ref) {
+        if (WideBuilder::isDeferred(ref)) {
+            const uint32_t k = uint32_t(ref & 0xFFFF'FFFFu);
+            const Subtree& part = p.sub.parts[k];
+            const uint32_t base = p.next;
+            p.next += uint32_t(part.totalNodes);
+            p.parts.emplace_back(k, base);
+            // A part's root is its first node in pre-order (or a leaf, placed as it is).
+            return format::isInternal(part.root) ? format::makeInternalRef(base) : part.root;
+        }
+        if (!format::isInternal(ref)) return ref;
+        const uint32_t index = p.next++;
+        Node node = p.sub.nodes[format::nodeIndex(ref)];
+        for (uint32_t i = 0; i < format::kNodeWidth; ++i)
+            if (node.child[i] != format::kEmptyRef) node.child[i] = placeNode(p, node.child[i]);
+        out_[index] = node;
+        return format::makeInternalRef(index);
+    }
+
+    Node* out_;
+    const ParallelFor& parallel_;
+};
 
 }  // namespace
 
@@ -418,23 +500,44 @@ BvhBuildResult buildWideBvh(PrimRef* refs, uint32_t n, const BvhBuildSettings& s
     if (n == 0) return result;
     Range all;
     all.begin = 0, all.end = n;
-    for (uint32_t i = 0; i < n; ++i) {
-        all.bounds.extend(refLower(refs[i]));
-        all.bounds.extend(refUpper(refs[i]));
-        all.centroids.extend(refCentroid2(refs[i]));
-    }
+    // The root's bounds, in chunks on several threads for a parallel build (min/max: the same in any order).
+    constexpr uint32_t kBoundsChunk = 65536;
+    const uint32_t chunks = (n + kBoundsChunk - 1) / kBoundsChunk;
+    std::vector<Box4> bounds(chunks), centroids(chunks);
+    auto boundChunk = [&](uint32_t c) {
+        Box4 b, cb;
+        for (uint32_t i = c * kBoundsChunk, end = std::min(n, (c + 1) * kBoundsChunk); i < end; ++i) {
+            const __m128 lo = xyz(_mm_loadu_ps(refs[i].lower)), up = xyz(_mm_loadu_ps(refs[i].upper));
+            b.extend(lo, up);
+            const __m128 ctr = _mm_add_ps(lo, up);
+            cb.extend(ctr, ctr);
+        }
+        bounds[c] = b, centroids[c] = cb;
+    };
+    if (parallel && chunks > 1)
+        (*parallel)(chunks, boundChunk);
+    else
+        for (uint32_t c = 0; c < chunks; ++c) boundChunk(c);
+    Box4 b, cb;
+    for (uint32_t c = 0; c < chunks; ++c) b.extend(bounds[c].lower, bounds[c].upper), cb.extend(centroids[c].lower, centroids[c].upper);
+    all.bounds = b.aabb();
+    all.centroids = cb.aabb();
     result.bounds = all.bounds;
+    // Builds with large ranges partition those through a spare array, with threads or without: the same tree.
+    std::unique_ptr<PrimRef[]> spare;
+    if (n >= kStablePartitionMin) spare.reset(new PrimRef[n]);
     if (!parallel || n <= 2 * kParallelGrain) {
         WideBuilder builder(refs, settings, nodes);
+        builder.useSpare(spare.get());
         result.root = builder.build(all);
         result.nodeCount = builder.nodeCount();
         return result;
     }
     Subtree tree;
-    buildSubtree(refs, all, settings, *parallel, tree);
-    std::copy(tree.nodes.begin(), tree.nodes.end(), nodes);
-    result.root = tree.root;
-    result.nodeCount = uint32_t(tree.nodes.size());
+    buildSubtree(refs, spare.get(), all, settings, *parallel, tree);
+    Assembler assembler(nodes, *parallel);
+    result.root = assembler.place(tree, 0);
+    result.nodeCount = uint32_t(tree.totalNodes);
     return result;
 }
 

@@ -5,14 +5,12 @@
 
 #include "engine/aabb_intersect.hpp"
 #include "engine/geometry_fetch.hpp"
+#include "engine/hit_rules.hpp"
 #include "engine/motion.hpp"
+#include "engine/node_intersect.hpp"
 #include "engine/lss_intersect.hpp"
 #include "engine/sphere_intersect.hpp"
 #include "vkas/vkas_compat.h"
-
-#if defined(__SSE2__)
-#include <emmintrin.h>
-#endif
 
 namespace vkas {
 
@@ -20,43 +18,10 @@ using namespace format;
 
 namespace {
 
-constexpr uint32_t kRayOpaque = 0x1, kRayNoOpaque = 0x2, kRayTerminateOnFirstHit = 0x4;
-constexpr uint32_t kRayCullBack = 0x10, kRayCullFront = 0x20, kRayCullOpaque = 0x40, kRayCullNoOpaque = 0x80;
-constexpr uint32_t kRaySkipTriangles = 0x100, kRaySkipAabbs = 0x200;
-constexpr uint32_t kInstanceCullDisable = 0x1, kInstanceFlipFacing = 0x2, kInstanceForceOpaque = 0x4,
-                   kInstanceForceNoOpaque = 0x8;
-
-// Box tests accept intervals that overlap within this relative slack, so rounding in the slab computation
-// never rejects a box that the exact ray touches (Ize, "Robust BVH Ray Traversal", 2013, with extra margin
-// for the shear of the triangle test).
-constexpr float kFarSlack = 1.0f + 1.0f / 1048576.0f;
-
-inline float maxNoNan(float a, float b) { return b > a ? b : a; }  // a NaN b leaves a
-inline float minNoNan(float a, float b) { return b < a ? b : a; }
-
 void resetHit(QueryHit& h, float tMax) {
     std::memset(&h, 0, sizeof h);
     h.type = kCommittedNone;
     h.t = tMax;
-}
-
-// Opacity in the spec's order: the geometry's OPAQUE flag, overridden by the instance's FORCE_* flags,
-// overridden by the ray's Opaque / NoOpaque flags.
-inline bool resolveOpacity(bool geometryOpaque, uint32_t instanceFlags, uint32_t rayFlags) {
-    bool opaque = geometryOpaque;
-    if (instanceFlags & kInstanceForceOpaque)
-        opaque = true;
-    else if (instanceFlags & kInstanceForceNoOpaque)
-        opaque = false;
-    if (rayFlags & kRayOpaque)
-        opaque = true;
-    else if (rayFlags & kRayNoOpaque)
-        opaque = false;
-    return opaque;
-}
-
-inline bool culledByOpacity(bool opaque, uint32_t rayFlags) {
-    return opaque ? (rayFlags & kRayCullOpaque) != 0 : (rayFlags & kRayCullNoOpaque) != 0;
 }
 
 void push(RayQueryState& q, ChildRef ref, float dist) {
@@ -65,54 +30,6 @@ void push(RayQueryState& q, ChildRef ref, float dist) {
         q.stackDist[q.sp] = dist;
         ++q.sp;
     }
-}
-
-// Distances at which the ray enters each child box (+inf where it misses), 4 or 8 lanes at a time. Returns the
-// mask of the children hit (bit i: child i).
-uint32_t childEntryDistances(const Node& node, const ShearedRay& r, float tMin, float tMax, float out[kNodeWidth]) {
-    // Near and far planes per axis, chosen by the sign of the direction. Empty slots (lower +inf, upper -inf)
-    // and NaN products (a zero direction component on a box plane) fall out of the comparisons below: NaN is
-    // never taken as a bound, so such a slab does not constrain the interval.
-    const bool nx = r.invDir[0] < 0.0f, ny = r.invDir[1] < 0.0f, nz = r.invDir[2] < 0.0f;
-    const float* nearX = nx ? node.upperX : node.lowerX;
-    const float* farX = nx ? node.lowerX : node.upperX;
-    const float* nearY = ny ? node.upperY : node.lowerY;
-    const float* farY = ny ? node.lowerY : node.upperY;
-    const float* nearZ = nz ? node.upperZ : node.lowerZ;
-    const float* farZ = nz ? node.lowerZ : node.upperZ;
-#if defined(__SSE2__)
-    const __m128 ox = _mm_set1_ps(r.org[0]), oy = _mm_set1_ps(r.org[1]), oz = _mm_set1_ps(r.org[2]);
-    const __m128 ix = _mm_set1_ps(r.invDir[0]), iy = _mm_set1_ps(r.invDir[1]), iz = _mm_set1_ps(r.invDir[2]);
-    const __m128 lo = _mm_set1_ps(tMin), hi = _mm_set1_ps(tMax), slack = _mm_set1_ps(kFarSlack);
-    const __m128 inf = _mm_set1_ps(INFINITY);
-    uint32_t mask = 0;
-    for (uint32_t k = 0; k < kNodeWidth; k += 4) {
-        // _mm_max_ps(v, acc) returns acc when v is NaN: the NaN-ignoring max the scalar code spells out.
-        __m128 tNear = _mm_max_ps(_mm_mul_ps(_mm_sub_ps(_mm_load_ps(nearX + k), ox), ix), lo);
-        tNear = _mm_max_ps(_mm_mul_ps(_mm_sub_ps(_mm_load_ps(nearY + k), oy), iy), tNear);
-        tNear = _mm_max_ps(_mm_mul_ps(_mm_sub_ps(_mm_load_ps(nearZ + k), oz), iz), tNear);
-        __m128 tFar = _mm_min_ps(_mm_mul_ps(_mm_sub_ps(_mm_load_ps(farX + k), ox), ix), hi);
-        tFar = _mm_min_ps(_mm_mul_ps(_mm_sub_ps(_mm_load_ps(farY + k), oy), iy), tFar);
-        tFar = _mm_min_ps(_mm_mul_ps(_mm_sub_ps(_mm_load_ps(farZ + k), oz), iz), tFar);
-        __m128 hit = _mm_cmple_ps(tNear, _mm_mul_ps(tFar, slack));
-        _mm_storeu_ps(out + k, _mm_or_ps(_mm_and_ps(hit, tNear), _mm_andnot_ps(hit, inf)));
-        mask |= uint32_t(_mm_movemask_ps(hit)) << k;
-    }
-    return mask;
-#else
-    uint32_t mask = 0;
-    for (uint32_t i = 0; i < kNodeWidth; ++i) {
-        float tNear = maxNoNan(tMin, (nearX[i] - r.org[0]) * r.invDir[0]);
-        tNear = maxNoNan(tNear, (nearY[i] - r.org[1]) * r.invDir[1]);
-        tNear = maxNoNan(tNear, (nearZ[i] - r.org[2]) * r.invDir[2]);
-        float tFar = minNoNan(tMax, (farX[i] - r.org[0]) * r.invDir[0]);
-        tFar = minNoNan(tFar, (farY[i] - r.org[1]) * r.invDir[1]);
-        tFar = minNoNan(tFar, (farZ[i] - r.org[2]) * r.invDir[2]);
-        out[i] = tNear <= tFar * kFarSlack ? tNear : INFINITY;
-        if (out[i] != INFINITY) mask |= 1u << i;
-    }
-    return mask;
-#endif
 }
 
 // Tests the children of one node and pushes the hit ones, farthest first so the nearest is popped next.
@@ -137,13 +54,6 @@ void visitNode(RayQueryState& q, const Node& node, const ShearedRay& r) {
         ref[k] = node.child[i];
     }
     for (uint32_t k = 0; k < hits; ++k) push(q, ref[k], dist[k]);
-}
-
-void transformRay(const float (*m)[4], const float o[3], const float d[3], float oo[3], float od[3]) {
-    for (int r = 0; r < 3; ++r) {
-        oo[r] = float(double(m[r][0]) * o[0] + double(m[r][1]) * o[1] + double(m[r][2]) * o[2] + double(m[r][3]));
-        od[r] = float(double(m[r][0]) * d[0] + double(m[r][1]) * d[1] + double(m[r][2]) * d[2]);
-    }
 }
 
 // Enters `inst` with the world-to-object transform `worldToObject` (the record's own, or [NV-motion] the one
