@@ -1,6 +1,7 @@
 #include "api/deferred_operation.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <memory>
 #include <string>
 #include <new>
@@ -98,6 +99,7 @@ void DeferredOperation::runOne(std::unique_lock<std::mutex>& lock) {
 
 VkResult DeferredOperation::join() {
     std::unique_lock<std::mutex> lock(mutex_);
+    bool waited = false;
     for (;;) {
         if (!pending_) return VK_SUCCESS;
         if (!queue_.empty()) {
@@ -121,8 +123,16 @@ VkResult DeferredOperation::join() {
             changed_.notify_all();
             return VK_SUCCESS;
         }
-        // Nothing to hand out now. Tasks that may still spread work are running: more may come (IDLE); otherwise
-        // the remaining work belongs to other threads (DONE).
+        // Nothing to hand out now. Tasks that may still spread work are running: more may come. Wait a little for
+        // it before answering IDLE: applications call join again at once, and many threads doing so would contend
+        // with the workers for the lock. Otherwise the remaining work belongs to other threads (DONE).
+        if (topLevelLeft_ > 0 && !waited) {
+            waited = true;
+            changed_.wait_for(lock, std::chrono::milliseconds(1), [this] {
+                return !pending_ || !queue_.empty() || (running_ == 0 && topLevelLeft_ == 0);
+            });
+            continue;
+        }
         return topLevelLeft_ > 0 ? VK_THREAD_IDLE_KHR : VK_THREAD_DONE_KHR;
     }
 }
