@@ -161,6 +161,39 @@ TEST_F(host_threading, deterministic_across_joined_threads) {
     EXPECT_TRUE(takeValidationErrors().empty());
 }
 
+// build fast_build: PREFER_FAST_BUILD structures (the Morton-code builder), bottom and top level, deferred and
+// completed by 1 to 8 joined threads: byte-identical to the build without deferral.
+TEST_F(host_threading, fast_build_deterministic_across_joined_threads) {
+    const Mesh mesh = terrain(150, rng);  // 45,000 triangles
+    auto geometry = makeGeometry(mesh, VK_INDEX_TYPE_UINT32, VK_GEOMETRY_OPAQUE_BIT_KHR);
+    BuildOptions fast;
+    fast.flags = VK_BUILD_ACCELERATION_STRUCTURE_PREFER_FAST_BUILD_BIT_KHR;
+    AccelStruct* reference = buildBlas(*geometry, fast);
+    const std::vector<uint8_t> expected = structureBytes(reference);
+    std::vector<Instance> instances(12000);
+    for (auto& inst : instances) {
+        inst.transform = randomTransform(rng, 0.01f, 0.05f, rng.coin(0.2), 50.0f);
+        inst.blas = reference;
+    }
+    AccelStruct* referenceTlas = buildTlas(instances, fast);
+    const std::vector<uint8_t> expectedTlas = structureBytes(referenceTlas);
+
+    VkDeferredOperationKHR op = createOperation();
+    for (uint32_t threads : {1u, 2u, 3u, 8u}) {
+        SCOPED_TRACE("joined threads: " + std::to_string(threads));
+        auto blas = prepareBlas({geometry.get()}, fast);
+        buildDeferred({blas.get()}, op, threads);
+        EXPECT_TRUE(structureBytes(blas->as) == expected) << "bottom level differs from the build without deferral";
+        auto tlas = prepareTlas(instances, fast);
+        buildDeferred({tlas.get()}, op, threads);
+        EXPECT_TRUE(structureBytes(tlas->as) == expectedTlas) << "top level differs from the build without deferral";
+    }
+    AccelStruct* single = buildSingleInstanceTlas(reference);
+    checkRays(single, randomRays(*single->scene, 300));
+    vkDestroyDeferredOperationKHR(device, op, nullptr);
+    EXPECT_TRUE(takeValidationErrors().empty());
+}
+
 // cpuht: many bottom-level builds in one deferred call, spread over the joined threads.
 TEST_F(host_threading, many_infos_one_operation) {
     std::vector<std::unique_ptr<GeometryData>> geometries;

@@ -21,13 +21,13 @@ struct Box4 {
     void extend(const Box4& b) { extend(b.lower, b.upper); }
 
     // Half the surface area (only ratios matter to the SAH); 0 for an empty box, as Aabb::halfArea.
+    // In registers: (dx dy + dy dz) + dz dx, rounded exactly as the scalar expression.
     float halfArea() const {
-        alignas(16) float lo[4], up[4];
-        _mm_store_ps(lo, lower);
-        _mm_store_ps(up, upper);
-        if (!(lo[0] <= up[0] && lo[1] <= up[1] && lo[2] <= up[2])) return 0.0f;
-        const float dx = up[0] - lo[0], dy = up[1] - lo[1], dz = up[2] - lo[2];
-        return dx * dy + dy * dz + dz * dx;
+        if ((_mm_movemask_ps(_mm_cmple_ps(lower, upper)) & 7) != 7) return 0.0f;
+        const __m128 d = _mm_sub_ps(upper, lower);
+        const __m128 p = _mm_mul_ps(d, _mm_shuffle_ps(d, d, _MM_SHUFFLE(3, 0, 2, 1)));  // dx dy, dy dz, dz dx
+        const __m128 s = _mm_add_ss(p, _mm_shuffle_ps(p, p, _MM_SHUFFLE(3, 2, 1, 1)));
+        return _mm_cvtss_f32(_mm_add_ss(s, _mm_shuffle_ps(p, p, _MM_SHUFFLE(3, 2, 1, 2))));
     }
 
     Aabb aabb() const {

@@ -3,6 +3,7 @@
 #include <vulkan/vulkan_core.h>
 
 #include "engine/box4.hpp"
+#include "engine/morton_builder.hpp"
 
 #include <algorithm>
 #include <limits>
@@ -16,10 +17,7 @@ using format::Node;
 
 BvhBuildSettings buildSettingsFor(uint32_t maxLeafSize, uint32_t buildFlags) {
     BvhBuildSettings s{maxLeafSize};
-    if (buildFlags & VK_BUILD_ACCELERATION_STRUCTURE_PREFER_FAST_BUILD_BIT_KHR) {
-        s.binCount = 8;
-        s.largestAxisOnly = true;
-    }
+    if (buildFlags & VK_BUILD_ACCELERATION_STRUCTURE_PREFER_FAST_BUILD_BIT_KHR) s.morton = true;
     return s;
 }
 
@@ -261,43 +259,57 @@ private:
                 for (int k = 0; k < axisCount; ++k) local.add(axes[k], b[axes[k]], lo, up);
             }
         }, bins, Bins(binCount));
+        // The SAH sweeps of the binned axes run interleaved (independent chains of box extensions). Each axis keeps
+        // its first cheapest bin, then the axes are compared in order: the first cheapest split in axis-major order.
+        float rightArea[3][kBins];
+        uint32_t rightCount[3][kBins];
+        {
+            Box4 acc[3];
+            uint32_t cnt[3] = {0, 0, 0};
+            for (int b = binCount - 1; b > 0; --b)
+                for (int k = 0; k < axisCount; ++k) {
+                    const int a = axes[k];
+                    acc[k].extend(bins.bounds[a][b].lower, bins.bounds[a][b].upper);
+                    cnt[k] += bins.count[a][b];
+                    rightArea[k][b] = acc[k].halfArea();
+                    rightCount[k][b] = cnt[k];
+                }
+        }
+        float axisCost[3] = {std::numeric_limits<float>::infinity(), std::numeric_limits<float>::infinity(),
+                             std::numeric_limits<float>::infinity()};
+        int axisBin[3] = {-1, -1, -1};
+        {
+            Box4 acc[3];
+            uint32_t cnt[3] = {0, 0, 0};
+            for (int b = 0; b < binCount - 1; ++b)  // split between bin b and b + 1
+                for (int k = 0; k < axisCount; ++k) {
+                    const int a = axes[k];
+                    acc[k].extend(bins.bounds[a][b].lower, bins.bounds[a][b].upper);
+                    cnt[k] += bins.count[a][b];
+                    if (cnt[k] == 0 || rightCount[k][b + 1] == 0) continue;
+                    const float cost =
+                        acc[k].halfArea() * float(cnt[k]) + rightArea[k][b + 1] * float(rightCount[k][b + 1]);
+                    if (cost < axisCost[k]) axisCost[k] = cost, axisBin[k] = b;
+                }
+        }
         float bestCost = std::numeric_limits<float>::infinity();
         int bestAxis = -1, bestBin = -1;
         for (int k = 0; k < axisCount; ++k) {
             const int a = axes[k];
-            if (scale[a] == 0.0f) continue;
-            float rightArea[kBins];
-            uint32_t rightCount[kBins];
-            Box4 acc;
-            uint32_t cnt = 0;
-            for (int b = binCount - 1; b > 0; --b) {
-                acc.extend(bins.bounds[a][b].lower, bins.bounds[a][b].upper);
-                cnt += bins.count[a][b];
-                rightArea[b] = acc.halfArea();
-                rightCount[b] = cnt;
-            }
-            acc = Box4{};
-            cnt = 0;
-            for (int b = 0; b < binCount - 1; ++b) {  // split between bin b and b + 1
-                acc.extend(bins.bounds[a][b].lower, bins.bounds[a][b].upper);
-                cnt += bins.count[a][b];
-                if (cnt == 0 || rightCount[b + 1] == 0) continue;
-                float cost = acc.halfArea() * float(cnt) + rightArea[b + 1] * float(rightCount[b + 1]);
-                if (cost < bestCost) {
-                    bestCost = cost;
-                    bestAxis = a;
-                    bestBin = b;
-                }
-            }
+            if (scale[a] == 0.0f || axisBin[k] < 0) continue;
+            if (axisCost[k] < bestCost) bestCost = axisCost[k], bestAxis = a, bestBin = axisBin[k];
         }
         if (bestAxis < 0) return halve(r, left, right);
 
         // Partition in place (primitives in bins <= bestBin go left), gathering each side's bounds and centroid
         // bounds on the way: the children need no further pass.
-        auto goesLeft = [&](__m128 lo, __m128 up) {
-            alignas(16) int b[4];
-            _mm_store_si128(reinterpret_cast<__m128i*>(b), binsOf(lo, up));
-            return b[bestAxis] <= bestBin;
+        // bin <= bestBin, decided on the split axis alone: the bin is trunc(clamp(f, 0, last)) with NaN in bin 0, and
+        // bestBin + 1 <= last, so it is !(f >= bestBin + 1) with f computed as binsOf computes it.
+        const __m128 splitLimit = _mm_set1_ps(float(bestBin + 1));
+        const int axisBit = 1 << bestAxis;
+        auto goesLeft = [=](__m128 lo, __m128 up) {
+            const __m128 f = _mm_mul_ps(_mm_sub_ps(_mm_add_ps(lo, up), origin), scale4);
+            return (_mm_movemask_ps(_mm_cmpge_ps(f, splitLimit)) & axisBit) == 0;
         };
         RangeBounds lb, rb;
         auto add = [](RangeBounds& side, __m128 lo, __m128 up) {
@@ -496,6 +508,7 @@ private:
 
 BvhBuildResult buildWideBvh(PrimRef* refs, uint32_t n, const BvhBuildSettings& settings, Node* nodes,
                             const ParallelFor* parallel) {
+    if (settings.morton) return buildMortonBvh(refs, n, settings.maxLeafSize, nodes, parallel);
     BvhBuildResult result;
     if (n == 0) return result;
     Range all;
