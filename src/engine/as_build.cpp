@@ -149,23 +149,26 @@ uint32_t gatherTriangles(const BuildJob& job, PrimRef* refs, TriangleRecord* tem
         uint32_t flags = 0;
         if (geom.flags & VK_GEOMETRY_OPAQUE_BIT_KHR) flags |= kTriangleOpaque;
         if (geom.flags & VK_GEOMETRY_NO_DUPLICATE_ANY_HIT_INVOCATION_BIT_KHR) flags |= kTriangleNoDuplicateAnyHit;
-        for (uint32_t i = ch.begin; i < ch.end; ++i) {
-            const uint64_t k = ch.base + i;
-            TriangleRecord& rec = temp[k];
-            refs[k].pad = 0;  // not kept
-            if (!source.fetch(i, rec.v)) continue;  // inactive: never hit, never updated back to life
-            rec.geometryIndex = ch.geometry;
-            rec.primitiveIndex = i;
-            rec.flags = flags;
-            if (isDegenerateTriangle(rec.v)) {
-                if (!keepDegenerate) continue;
-                rec.flags |= kTriangleDegenerate;
+        // The reader specialised for the geometry's index type, vertex format and transform (no per-vertex dispatch).
+        source.visit([&](auto reader) {
+            for (uint32_t i = ch.begin; i < ch.end; ++i) {
+                const uint64_t k = ch.base + i;
+                TriangleRecord& rec = temp[k];
+                refs[k].pad = 0;  // not kept
+                if (!reader.fetch(i, rec.v)) continue;  // inactive: never hit, never updated back to life
+                rec.geometryIndex = ch.geometry;
+                rec.primitiveIndex = i;
+                rec.flags = flags;
+                if (isDegenerateTriangle(rec.v)) {
+                    if (!keepDegenerate) continue;
+                    rec.flags |= kTriangleDegenerate;
+                }
+                Aabb b;
+                for (auto& v : rec.v) b.extend(Vec3{v[0], v[1], v[2]});
+                setRef(refs[k], uint32_t(k), b);
+                refs[k].pad = 1;  // kept
             }
-            Aabb b;
-            for (auto& v : rec.v) b.extend(Vec3{v[0], v[1], v[2]});
-            setRef(refs[k], uint32_t(k), b);
-            refs[k].pad = 1;  // kept
-        }
+        });
     };
     if (job.parallel && chunks.size() > 1)
         (*job.parallel)(uint32_t(chunks.size()), fetchChunk);

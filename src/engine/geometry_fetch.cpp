@@ -12,6 +12,13 @@ TriangleSource::TriangleSource(const VkAccelerationStructureGeometryTrianglesDat
       stride_(data.vertexStride),
       indexType_(data.indexType),
       hasTransform_(data.transformData.hostAddress != nullptr),
+      indexKind_(indexType_ == VK_INDEX_TYPE_UINT16   ? TriangleIndexKind::U16
+                 : indexType_ == VK_INDEX_TYPE_UINT32 ? TriangleIndexKind::U32
+                                                      : TriangleIndexKind::None),
+      vertexKind_(format_ == VK_FORMAT_R32G32B32_SFLOAT || format_ == VK_FORMAT_R32G32B32A32_SFLOAT
+                      ? TriangleVertexKind::Float3
+                  : format_ == VK_FORMAT_R32G32_SFLOAT ? TriangleVertexKind::Float2
+                                                       : TriangleVertexKind::Other),
       count_(range.primitiveCount) {
     auto* vertexBase = static_cast<const std::byte*>(data.vertexData.hostAddress);
     if (indexType_ == VK_INDEX_TYPE_NONE_KHR) {
@@ -32,43 +39,15 @@ TriangleSource::TriangleSource(const VkAccelerationStructureGeometryTrianglesDat
 }
 
 uint64_t TriangleSource::vertexIndex(uint32_t i, uint32_t j) const {
-    uint64_t k = 3ull * i + j;
-    switch (indexType_) {
-        case VK_INDEX_TYPE_UINT16: return loadUnaligned<uint16_t>(indices_ + 2 * k);
-        case VK_INDEX_TYPE_UINT32: return loadUnaligned<uint32_t>(indices_ + 4 * k);
-        default: return k;
+    switch (indexKind_) {
+        case TriangleIndexKind::U16: return vertexIndexAs<TriangleIndexKind::U16>(i, j);
+        case TriangleIndexKind::U32: return vertexIndexAs<TriangleIndexKind::U32>(i, j);
+        default: return vertexIndexAs<TriangleIndexKind::None>(i, j);
     }
 }
 
 bool TriangleSource::fetch(uint32_t i, float v[3][3]) const {
-    bool active = true;
-    for (uint32_t j = 0; j < 3; ++j) {
-        double p[3];
-        decodeVertex(format_, vertices_ + stride_ * vertexIndex(i, j), p);
-        if (std::isnan(p[0])) active = false;  // inactive: any NaN in a vertex's raw X
-        if (hasTransform_) {
-            double q[3];
-            applyAffine(transform_, p, q);
-            for (int c = 0; c < 3; ++c) v[j][c] = float(q[c]);
-        } else {
-            for (int c = 0; c < 3; ++c) v[j][c] = float(p[c]);
-        }
-    }
-    return active;
-}
-
-bool isDegenerateTriangle(const float v[3][3]) {
-    // Differences of floats are exact in double (barring extreme exponent ranges), so a zero cross product
-    // means the three points are collinear.
-    double e1[3], e2[3];
-    for (int c = 0; c < 3; ++c) {
-        e1[c] = double(v[1][c]) - double(v[0][c]);
-        e2[c] = double(v[2][c]) - double(v[0][c]);
-    }
-    double n0 = e1[1] * e2[2] - e1[2] * e2[1];
-    double n1 = e1[2] * e2[0] - e1[0] * e2[2];
-    double n2 = e1[0] * e2[1] - e1[1] * e2[0];
-    return n0 == 0.0 && n1 == 0.0 && n2 == 0.0;
+    return visit([&](auto reader) { return reader.fetch(i, v); });
 }
 
 AabbSource::AabbSource(const VkAccelerationStructureGeometryAabbsDataKHR& data,

@@ -1,5 +1,7 @@
 #include "engine/refit.hpp"
 
+#include <immintrin.h>
+
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -10,6 +12,7 @@
 #include "engine/geometry_fetch.hpp"
 #include "engine/motion.hpp"
 #include "engine/sphere_fetch.hpp"
+
 
 namespace vkas {
 
@@ -99,30 +102,226 @@ private:
     uint32_t current_ = UINT32_MAX;
 };
 
-// Each refitter turns the source record `in` into the destination record `out` (which may alias `in`) and
-// extends `box` by the new record's box. A record whose primitive is not valid any more (invalid usage that
-// validation reports: it became inactive, its box is inverted, its instance names no structure) is kept but
-// never hit, and adds nothing to the box.
-
-struct TriangleRefitter {
-    static constexpr size_t kSize = sizeof(TriangleRecord);
-    TriangleInputs inputs;
-    explicit TriangleRefitter(const RefitJob& job) : inputs(job) {}
-    void operator()(const std::byte* in, std::byte* out, Aabb& box) {
-        TriangleRecord rec;
-        std::memcpy(&rec, in, sizeof rec);
-        const TriangleSource* s = inputs.at(rec.geometryIndex);
-        if (s && rec.primitiveIndex < s->primitiveCount()) {
-            const bool active = s->fetch(rec.primitiveIndex, rec.v);
-            // Degenerate is re-decided: a triangle that has area again is hit again, and vice versa.
-            rec.flags &= ~kTriangleDegenerate;
-            if (!active || isDegenerateTriangle(rec.v)) rec.flags |= kTriangleDegenerate;
-            if (active)
-                for (auto& v : rec.v) box.extend(Vec3{v[0], v[1], v[2]});
-        }
-        std::memcpy(out, &rec, sizeof rec);
+// A leaf's box while its records are refitted: x, y, z in lanes 0-2 (lane 3 is ignored). `extend` takes the
+// new point first so that a NaN coordinate leaves the box as it was, as Aabb::extend does (std::min / std::max
+// keep their first argument unless the second compares smaller / larger; so do these, ties included).
+struct LeafBox {
+    __m128 lower = _mm_set1_ps(kInf);
+    __m128 upper = _mm_set1_ps(-kInf);
+    void extend(__m128 p) {
+        lower = _mm_min_ps(p, lower);
+        upper = _mm_max_ps(p, upper);
+    }
+    void extend(const Aabb& b) {
+        lower = _mm_min_ps(_mm_setr_ps(b.lower.x, b.lower.y, b.lower.z, 0.0f), lower);
+        upper = _mm_max_ps(_mm_setr_ps(b.upper.x, b.upper.y, b.upper.z, 0.0f), upper);
     }
 };
+
+// Refitters (`leaves`) turn the source records of the leaf slots of one node into destination records (which may
+// alias them) and set each leaf slot's box to the union of its new records' boxes. A record whose primitive is not valid any more (invalid
+// usage that validation reports: it became inactive, its box is inverted, its instance names no structure) is
+// kept but never hit, and adds nothing to the box. PerRecord adapts the refitters that work one record at a time.
+template <class RecordRefitter>
+struct PerRecord {
+    RecordRefitter refit;
+    explicit PerRecord(const RefitJob& job) : refit(job) {}
+    void leaves(const std::byte* src, std::byte* dst, const ChildRef refs[kNodeWidth], uint64_t recordCount,
+                LeafBox boxes[kNodeWidth]) {
+        for (uint32_t i = 0; i < kNodeWidth; ++i) {
+            if (!isLeaf(refs[i])) continue;
+            const uint64_t first = leafFirst(refs[i]), end = std::min(first + leafCount(refs[i]), recordCount);
+            Aabb b;
+            for (uint64_t j = first; j < end; ++j)
+                refit(src + j * RecordRefitter::kSize, dst + j * RecordRefitter::kSize, b);
+            boxes[i].extend(b);
+        }
+    }
+};
+
+// One float vertex in lanes 0-2 (z = 0 for two components), lane 3 zero. Reads exactly the vertex's bytes.
+template <TriangleVertexKind V>
+inline __m128 loadFloatVertex(const std::byte* p) {
+    uint64_t xy;
+    std::memcpy(&xy, p, 8);
+    const __m128 lo = _mm_castsi128_ps(_mm_cvtsi64_si128(int64_t(xy)));
+    if constexpr (V == TriangleVertexKind::Float3) return _mm_movelh_ps(lo, _mm_set_ss(loadUnaligned<float>(p + 8)));
+    return lo;
+}
+
+// isDegenerateTriangle on vertices in registers: the same double differences and products, two lanes at a time
+// (the middle component comes out negated, which keeps whether it is zero), so the decision is the build's.
+inline bool isDegenerateTriangleSse(__m128 v0, __m128 v1, __m128 v2) {
+    const __m128d a = _mm_cvtps_pd(v0), az = _mm_cvtps_pd(_mm_movehl_ps(v0, v0));
+    const __m128d e1 = _mm_sub_pd(_mm_cvtps_pd(v1), a), e1z = _mm_sub_pd(_mm_cvtps_pd(_mm_movehl_ps(v1, v1)), az);
+    const __m128d e2 = _mm_sub_pd(_mm_cvtps_pd(v2), a), e2z = _mm_sub_pd(_mm_cvtps_pd(_mm_movehl_ps(v2, v2)), az);
+    const __m128d e2s = _mm_shuffle_pd(e2, e2, 1);  // (e2y, e2x)
+    const __m128d t = _mm_mul_pd(e1, e2s);           // (e1x e2y, e1y e2x)
+    const __m128d n2 = _mm_sub_sd(t, _mm_unpackhi_pd(t, t));
+    // (e1y e2z - e1z e2y, e1x e2z - e1z e2x) = (n0, -n1)
+    const __m128d n01 = _mm_sub_pd(_mm_mul_pd(_mm_shuffle_pd(e1, e1, 1), _mm_unpacklo_pd(e2z, e2z)),
+                                   _mm_mul_pd(_mm_unpacklo_pd(e1z, e1z), e2s));
+    const __m128d zero = _mm_setzero_pd();
+    return _mm_movemask_pd(_mm_cmpeq_pd(n01, zero)) == 3 && (_mm_movemask_pd(_mm_cmpeq_sd(n2, zero)) & 1);
+}
+
+// Triangle records (non-motion). Each leaf's records are re-fetched with the reader specialised for their
+// geometry's index type, vertex format and transform (TriangleSource::visit), and the leaf box is extended while
+// each record is written. Float vertices without a transform stay in SSE registers from load to record.
+class TriangleRefitter {
+public:
+    explicit TriangleRefitter(const RefitJob& job) : main_(job), other_(job) {}
+
+    // Refits the records of the leaf slots of one node and sets their boxes. Records whose geometry has float
+    // vertices and no transform are refitted in two steps over the whole node: first their indices are read and
+    // their vertices' lines requested, then the vertices are read and the records written; so the cache misses of
+    // many records overlap instead of forming one dependent chain per record.
+    void leaves(const std::byte* src, std::byte* dst, const ChildRef refs[kNodeWidth], uint64_t recordCount,
+                LeafBox boxes[kNodeWidth]) {
+        const TriangleSource* s = nullptr;
+        uint32_t g = 0;
+        for (uint32_t i = 0; i < kNodeWidth && !s; ++i)
+            if (isLeaf(refs[i]) && leafFirst(refs[i]) < recordCount) {
+                g = loadUnaligned<uint32_t>(src + leafFirst(refs[i]) * kSize + 36);
+                s = main_.at(g);
+            }
+        if (s) {
+            s->visit([&](auto reader) { batch(reader, g, src, dst, refs, recordCount, boxes); });
+        } else {
+            for (uint32_t i = 0; i < kNodeWidth; ++i)
+                if (isLeaf(refs[i])) {
+                    const uint64_t first = leafFirst(refs[i]), end = std::min(first + leafCount(refs[i]), recordCount);
+                    for (uint64_t j = first; j < end; ++j) one(src, dst, j, boxes[i]);
+                }
+        }
+    }
+
+private:
+    static constexpr size_t kSize = sizeof(TriangleRecord);
+    static constexpr uint32_t kBatch = 64;
+
+    struct Pending {
+        const std::byte* vertex[3];
+        uint64_t record;
+        uint32_t primitive, flags, slot;
+    };
+
+    template <class Reader>
+    static constexpr bool kFloats = Reader::kVertex != TriangleVertexKind::Other && !Reader::kTransform;
+
+    // One record, through its own geometry's reader (other_, so that main_'s reader stays valid).
+    void one(const std::byte* src, std::byte* dst, uint64_t j, LeafBox& box) {
+        const uint32_t g = loadUnaligned<uint32_t>(src + j * kSize + 36);
+        const TriangleSource* s = other_.at(g);
+        if (!s) {  // names no geometry of the inputs: kept as it is
+            if (src != dst) std::memcpy(dst + j * kSize, src + j * kSize, kSize);
+            return;
+        }
+        s->visit([&](auto reader) { run(reader, src, dst, j, box); });
+    }
+
+    template <class Reader>
+    void batch(const Reader& reader, uint32_t g, const std::byte* src, std::byte* dst, const ChildRef refs[kNodeWidth],
+               uint64_t recordCount, LeafBox boxes[kNodeWidth]) {
+        Pending pending[kBatch];
+        uint32_t n = 0;
+        const uint32_t count = reader.primitiveCount();
+        for (uint32_t i = 0; i < kNodeWidth; ++i) {
+            if (!isLeaf(refs[i])) continue;
+            const uint64_t first = leafFirst(refs[i]), end = std::min(first + leafCount(refs[i]), recordCount);
+            for (uint64_t j = first; j < end; ++j) {
+                uint32_t ids[2];  // geometryIndex, primitiveIndex
+                std::memcpy(ids, src + j * kSize + 36, 8);
+                if (ids[0] != g) {
+                    one(src, dst, j, boxes[i]);
+                } else if constexpr (!kFloats<Reader>) {
+                    run(reader, src, dst, j, boxes[i]);
+                } else if (ids[1] >= count) {  // not a primitive of the inputs: kept as it is
+                    if (src != dst) std::memcpy(dst + j * kSize, src + j * kSize, kSize);
+                } else {
+                    Pending& p = pending[n++];
+                    p.record = j, p.primitive = ids[1], p.slot = i;
+                    std::memcpy(&p.flags, src + j * kSize + 44, 4);
+                    for (uint32_t c = 0; c < 3; ++c) {
+                        p.vertex[c] = reader.vertexPointer(ids[1], c);
+                        __builtin_prefetch(p.vertex[c], 0, 3);
+                    }
+                    if (n == kBatch) finish<Reader::kVertex>(pending, n, src, dst, g, boxes), n = 0;
+                }
+            }
+        }
+        finish<Reader::kVertex>(pending, n, src, dst, g, boxes);
+    }
+
+    // The second step of batch: float vertices without a transform, in SSE registers from load to record.
+    template <TriangleVertexKind V>
+    static void finish(const Pending* pending, uint32_t n, const std::byte* src, std::byte* dst, uint32_t g,
+                       LeafBox boxes[kNodeWidth]) {
+        for (uint32_t k = 0; k < n; ++k) {
+            const Pending& p = pending[k];
+            std::byte* out = dst + p.record * kSize;
+            __m128 v0 = loadFloatVertex<V>(p.vertex[0]);
+            __m128 v1 = loadFloatVertex<V>(p.vertex[1]);
+            __m128 v2 = loadFloatVertex<V>(p.vertex[2]);
+            const __m128 u0 = _mm_cmpunord_ps(v0, v0), u1 = _mm_cmpunord_ps(v1, v1), u2 = _mm_cmpunord_ps(v2, v2);
+            bool active = true;
+            if (_mm_movemask_ps(_mm_or_ps(_mm_or_ps(u0, u1), u2))) {
+                // rare: the general decode's double round trip quiets NaNs (roundTripFloat)
+                const __m128 quiet = _mm_castsi128_ps(_mm_set1_epi32(0x0040'0000));
+                v0 = _mm_or_ps(v0, _mm_and_ps(u0, quiet));
+                v1 = _mm_or_ps(v1, _mm_and_ps(u1, quiet));
+                v2 = _mm_or_ps(v2, _mm_and_ps(u2, quiet));
+                active = ((_mm_movemask_ps(u0) | _mm_movemask_ps(u1) | _mm_movemask_ps(u2)) & 1) == 0;  // raw X
+            }
+            uint32_t flags = p.flags & ~kTriangleDegenerate;
+            if (!active || isDegenerateTriangleSse(v0, v1, v2)) flags |= kTriangleDegenerate;
+            // v0 v1 v2 as 9 consecutive floats: (x0 y0 z0 x1) (y1 z1 x2 y2) z2
+            const __m128 t = _mm_shuffle_ps(v0, v1, _MM_SHUFFLE(0, 0, 2, 2));
+            _mm_storeu_ps(reinterpret_cast<float*>(out), _mm_shuffle_ps(v0, t, _MM_SHUFFLE(2, 0, 1, 0)));
+            _mm_storeu_ps(reinterpret_cast<float*>(out + 16), _mm_shuffle_ps(v1, v2, _MM_SHUFFLE(1, 0, 2, 1)));
+            const float z2 = _mm_cvtss_f32(_mm_movehl_ps(v2, v2));
+            std::memcpy(out + 32, &z2, 4);
+            if (src != dst) {
+                const uint32_t ids[2] = {g, p.primitive};
+                std::memcpy(out + 36, ids, 8);
+            }
+            std::memcpy(out + 44, &flags, 4);
+            if (active) {
+                LeafBox& box = boxes[p.slot];
+                box.extend(v0), box.extend(v1), box.extend(v2);
+            }
+        }
+    }
+
+    // Record j through any reader (whose geometry the record names).
+    template <class Reader>
+    static void run(const Reader& reader, const std::byte* src, std::byte* dst, uint64_t j, LeafBox& box) {
+        const std::byte* in = src + j * kSize;
+        std::byte* out = dst + j * kSize;
+        uint32_t ids[2], flags;  // geometryIndex, primitiveIndex
+        std::memcpy(ids, in + 36, 8);
+        std::memcpy(&flags, in + 44, 4);
+        if (ids[1] >= reader.primitiveCount()) {  // not a primitive of the inputs: kept as it is
+            if (in != out) std::memcpy(out, in, kSize);
+            return;
+        }
+        float v[3][3];
+        const bool active = reader.fetch(ids[1], v);
+        // Degenerate is re-decided: a triangle that has area again is hit again, and vice versa.
+        flags &= ~kTriangleDegenerate;
+        if (!active || isDegenerateTriangle(v)) flags |= kTriangleDegenerate;
+        std::memcpy(out, v, sizeof v);
+        if (in != out) std::memcpy(out + 36, ids, 8);
+        std::memcpy(out + 44, &flags, 4);
+        if (active)
+            for (const auto& q : v) box.extend(_mm_setr_ps(q[0], q[1], q[2], 0.0f));
+    }
+
+    TriangleInputs main_, other_;
+};
+
+// The per-record refitters (used through PerRecord) turn the source record `in` into the destination record `out`
+// (which may alias `in`) and extend `box` by the new record's box.
 
 struct MotionTriangleRefitter {
     static constexpr size_t kSize = sizeof(MotionTriangleRecord);
@@ -281,19 +480,38 @@ struct MotionInstanceRefitter {
     }
 };
 
-void setSlot(Node& n, uint32_t i, const Aabb& b) {
-    n.lowerX[i] = b.lower.x, n.lowerY[i] = b.lower.y, n.lowerZ[i] = b.lower.z;
-    n.upperX[i] = b.upper.x, n.upperY[i] = b.upper.y, n.upperZ[i] = b.upper.z;
+// All eight slots at once: lanes 0-2 of the boxes transposed into the node's arrays.
+void setSlots(Node& n, const LeafBox boxes[kNodeWidth]) {
+    for (uint32_t half = 0; half < 2; ++half) {
+        const LeafBox* b = boxes + 4 * half;
+        __m128 l0 = b[0].lower, l1 = b[1].lower, l2 = b[2].lower, l3 = b[3].lower;
+        _MM_TRANSPOSE4_PS(l0, l1, l2, l3);
+        _mm_storeu_ps(n.lowerX + 4 * half, l0), _mm_storeu_ps(n.lowerY + 4 * half, l1);
+        _mm_storeu_ps(n.lowerZ + 4 * half, l2);
+        __m128 u0 = b[0].upper, u1 = b[1].upper, u2 = b[2].upper, u3 = b[3].upper;
+        _MM_TRANSPOSE4_PS(u0, u1, u2, u3);
+        _mm_storeu_ps(n.upperX + 4 * half, u0), _mm_storeu_ps(n.upperY + 4 * half, u1);
+        _mm_storeu_ps(n.upperZ + 4 * half, u2);
+    }
 }
 
-Aabb nodeBox(const Node& n) {
-    Aabb b;
-    for (uint32_t i = 0; i < kNodeWidth; ++i) {
-        Aabb s;
-        s.lower = {n.lowerX[i], n.lowerY[i], n.lowerZ[i]};
-        s.upper = {n.upperX[i], n.upperY[i], n.upperZ[i]};
-        b.extend(s);
-    }
+// The union of a node's eight slots (empty slots are +inf / -inf; slot boxes never hold a NaN: they come from
+// LeafBox or from this function). The lanes are combined pairwise, so the sign of a zero coordinate may differ
+// from a sequential union's; no box test can tell (docs/FORMAT.md, "Update (refit)").
+LeafBox nodeBox(const Node& n) {
+    auto lowest = [](const float* a) {
+        __m128 m = _mm_min_ps(_mm_loadu_ps(a), _mm_loadu_ps(a + 4));
+        m = _mm_min_ps(m, _mm_shuffle_ps(m, m, _MM_SHUFFLE(1, 0, 3, 2)));
+        return _mm_min_ps(m, _mm_shuffle_ps(m, m, _MM_SHUFFLE(2, 3, 0, 1)));
+    };
+    auto highest = [](const float* a) {
+        __m128 m = _mm_max_ps(_mm_loadu_ps(a), _mm_loadu_ps(a + 4));
+        m = _mm_max_ps(m, _mm_shuffle_ps(m, m, _MM_SHUFFLE(1, 0, 3, 2)));
+        return _mm_max_ps(m, _mm_shuffle_ps(m, m, _MM_SHUFFLE(2, 3, 0, 1)));
+    };
+    LeafBox b;
+    b.lower = _mm_movelh_ps(_mm_unpacklo_ps(lowest(n.lowerX), lowest(n.lowerY)), lowest(n.lowerZ));
+    b.upper = _mm_movelh_ps(_mm_unpacklo_ps(highest(n.upperX), highest(n.upperY)), highest(n.upperZ));
     return b;
 }
 
@@ -311,39 +529,37 @@ void refitTree(const RefitJob& job, Refitter& refit) {
     auto* dstNodes = reinterpret_cast<Node*>(job.dst + h.nodeOffset);
     const std::byte* srcRecords = job.src + h.recordOffset;
     std::byte* dstRecords = job.dst + h.recordOffset;
-    auto leafBox = [&](ChildRef ref) {
-        Aabb b;
-        const uint64_t first = leafFirst(ref);
-        const uint64_t end = std::min<uint64_t>(first + leafCount(ref), h.recordCount);
-        for (uint64_t j = first; j < end; ++j)
-            refit(srcRecords + j * Refitter::kSize, dstRecords + j * Refitter::kSize, b);
-        return b;
-    };
     // Preorder numbering: every child node has a larger index than its parent, so a reverse sweep finishes the
     // children first.
     for (uint64_t k = h.nodeCount; k-- > 0;) {
         Node n;
         std::memcpy(&n, &srcNodes[k], sizeof n);
+        LeafBox boxes[kNodeWidth];
+        refit.leaves(srcRecords, dstRecords, n.child, h.recordCount, boxes);
         for (uint32_t i = 0; i < kNodeWidth; ++i) {
             const ChildRef ref = n.child[i];
-            Aabb b;
-            if (isLeaf(ref)) {
-                b = leafBox(ref);
-            } else if (isInternal(ref)) {
+            if (isInternal(ref)) {
                 const uint32_t c = nodeIndex(ref);
-                if (c > k && c < h.nodeCount) b = nodeBox(dstNodes[c]);
+                if (c > k && c < h.nodeCount) boxes[i] = nodeBox(dstNodes[c]);
             }
-            setSlot(n, i, b);  // empty slots keep +inf / -inf
         }
+        setSlots(n, boxes);  // empty slots keep +inf / -inf
         std::memcpy(&dstNodes[k], &n, sizeof n);
     }
-    Aabb bounds;
-    if (isLeaf(h.root))
-        bounds = leafBox(h.root);
-    else if (isInternal(h.root) && nodeIndex(h.root) < h.nodeCount)
+    LeafBox bounds;
+    if (isLeaf(h.root)) {
+        ChildRef refs[kNodeWidth] = {h.root};
+        LeafBox boxes[kNodeWidth];
+        refit.leaves(srcRecords, dstRecords, refs, h.recordCount, boxes);
+        bounds = boxes[0];
+    } else if (isInternal(h.root) && nodeIndex(h.root) < h.nodeCount) {
         bounds = nodeBox(dstNodes[nodeIndex(h.root)]);
-    h.bounds[0] = bounds.lower.x, h.bounds[1] = bounds.lower.y, h.bounds[2] = bounds.lower.z;
-    h.bounds[3] = bounds.upper.x, h.bounds[4] = bounds.upper.y, h.bounds[5] = bounds.upper.z;
+    }
+    alignas(16) float lo[4], up[4];
+    _mm_store_ps(lo, bounds.lower);
+    _mm_store_ps(up, bounds.upper);
+    h.bounds[0] = lo[0], h.bounds[1] = lo[1], h.bounds[2] = lo[2];
+    h.bounds[3] = up[0], h.bounds[4] = up[1], h.bounds[5] = up[2];
     std::memcpy(job.dst, &h, sizeof h);
 }
 
@@ -496,18 +712,18 @@ VkResult refitAccelerationStructure(const RefitJob& job) {
     const bool motion = motion::isMotionBuild(h->buildFlags);
     if (h->type == uint32_t(StructureType::TopLevel)) {
         if (motion)
-            runRefit<MotionInstanceRefitter>(job);
+            runRefit<PerRecord<MotionInstanceRefitter>>(job);
         else
-            runRefit<InstanceRefitter>(job);
+            runRefit<PerRecord<InstanceRefitter>>(job);
         return VK_SUCCESS;
     }
     switch (h->primitiveType) {
-        case VK_GEOMETRY_TYPE_AABBS_KHR: runRefit<AabbRefitter>(job); break;
-        case VK_GEOMETRY_TYPE_SPHERES_NV: runRefit<SphereRefitter>(job); break;
-        case VK_GEOMETRY_TYPE_LINEAR_SWEPT_SPHERES_NV: runRefit<LssRefitter>(job); break;
+        case VK_GEOMETRY_TYPE_AABBS_KHR: runRefit<PerRecord<AabbRefitter>>(job); break;
+        case VK_GEOMETRY_TYPE_SPHERES_NV: runRefit<PerRecord<SphereRefitter>>(job); break;
+        case VK_GEOMETRY_TYPE_LINEAR_SWEPT_SPHERES_NV: runRefit<PerRecord<LssRefitter>>(job); break;
         default:
             if (motion)
-                runRefit<MotionTriangleRefitter>(job);
+                runRefit<PerRecord<MotionTriangleRefitter>>(job);
             else
                 runRefit<TriangleRefitter>(job);
             break;
