@@ -174,13 +174,33 @@ uint32_t gatherTriangles(const BuildJob& job, PrimRef* refs, TriangleRecord* tem
         (*job.parallel)(uint32_t(chunks.size()), fetchChunk);
     else
         for (uint32_t c = 0; c < chunks.size(); ++c) fetchChunk(c);
+    // Pack the refs of the kept triangles in order. The leading chunks whose triangles were all kept (usually all of
+    // them) stay in place and only clear their flags, in parallel; the rest is packed serially.
+    std::vector<uint8_t> whole(chunks.size());
+    auto checkChunk = [&](uint32_t c) {
+        const Chunk& ch = chunks[c];
+        bool all = true;
+        for (uint64_t k = ch.base + ch.begin; k < ch.base + ch.end; ++k) all = all && refs[k].pad != 0;
+        if (all)
+            for (uint64_t k = ch.base + ch.begin; k < ch.base + ch.end; ++k) refs[k].pad = 0;
+        whole[c] = all;
+    };
+    if (job.parallel && chunks.size() > 1)
+        (*job.parallel)(uint32_t(chunks.size()), checkChunk);
+    else
+        for (uint32_t c = 0; c < chunks.size(); ++c) checkChunk(c);
     uint32_t n = 0;
-    for (const Chunk& ch : chunks)
+    size_t c = 0;
+    for (; c < chunks.size() && whole[c] && chunks[c].base + chunks[c].begin == n; ++c)
+        n += chunks[c].end - chunks[c].begin;
+    for (; c < chunks.size(); ++c) {
+        const Chunk& ch = chunks[c];
         for (uint64_t k = ch.base + ch.begin; k < ch.base + ch.end; ++k)
-            if (refs[k].pad) {
+            if (whole[c] || refs[k].pad) {
                 refs[n] = refs[k];
                 refs[n++].pad = 0;
             }
+    }
     return n;
 }
 

@@ -259,45 +259,34 @@ private:
                 for (int k = 0; k < axisCount; ++k) local.add(axes[k], b[axes[k]], lo, up);
             }
         }, bins, Bins(binCount));
-        // The SAH sweeps of the binned axes run interleaved (independent chains of box extensions). Each axis keeps
-        // its first cheapest bin, then the axes are compared in order: the first cheapest split in axis-major order.
-        float rightArea[3][kBins];
-        uint32_t rightCount[3][kBins];
-        {
-            Box4 acc[3];
-            uint32_t cnt[3] = {0, 0, 0};
-            for (int b = binCount - 1; b > 0; --b)
-                for (int k = 0; k < axisCount; ++k) {
-                    const int a = axes[k];
-                    acc[k].extend(bins.bounds[a][b].lower, bins.bounds[a][b].upper);
-                    cnt[k] += bins.count[a][b];
-                    rightArea[k][b] = acc[k].halfArea();
-                    rightCount[k][b] = cnt[k];
-                }
-        }
-        float axisCost[3] = {std::numeric_limits<float>::infinity(), std::numeric_limits<float>::infinity(),
-                             std::numeric_limits<float>::infinity()};
-        int axisBin[3] = {-1, -1, -1};
-        {
-            Box4 acc[3];
-            uint32_t cnt[3] = {0, 0, 0};
-            for (int b = 0; b < binCount - 1; ++b)  // split between bin b and b + 1
-                for (int k = 0; k < axisCount; ++k) {
-                    const int a = axes[k];
-                    acc[k].extend(bins.bounds[a][b].lower, bins.bounds[a][b].upper);
-                    cnt[k] += bins.count[a][b];
-                    if (cnt[k] == 0 || rightCount[k][b + 1] == 0) continue;
-                    const float cost =
-                        acc[k].halfArea() * float(cnt[k]) + rightArea[k][b + 1] * float(rightCount[k][b + 1]);
-                    if (cost < axisCost[k]) axisCost[k] = cost, axisBin[k] = b;
-                }
-        }
         float bestCost = std::numeric_limits<float>::infinity();
         int bestAxis = -1, bestBin = -1;
         for (int k = 0; k < axisCount; ++k) {
             const int a = axes[k];
-            if (scale[a] == 0.0f || axisBin[k] < 0) continue;
-            if (axisCost[k] < bestCost) bestCost = axisCost[k], bestAxis = a, bestBin = axisBin[k];
+            if (scale[a] == 0.0f) continue;
+            float rightArea[kBins];
+            uint32_t rightCount[kBins];
+            Box4 acc;
+            uint32_t cnt = 0;
+            for (int b = binCount - 1; b > 0; --b) {
+                acc.extend(bins.bounds[a][b].lower, bins.bounds[a][b].upper);
+                cnt += bins.count[a][b];
+                rightArea[b] = acc.halfArea();
+                rightCount[b] = cnt;
+            }
+            acc = Box4{};
+            cnt = 0;
+            for (int b = 0; b < binCount - 1; ++b) {  // split between bin b and b + 1
+                acc.extend(bins.bounds[a][b].lower, bins.bounds[a][b].upper);
+                cnt += bins.count[a][b];
+                if (cnt == 0 || rightCount[b + 1] == 0) continue;
+                float cost = acc.halfArea() * float(cnt) + rightArea[b + 1] * float(rightCount[b + 1]);
+                if (cost < bestCost) {
+                    bestCost = cost;
+                    bestAxis = a;
+                    bestBin = b;
+                }
+            }
         }
         if (bestAxis < 0) return halve(r, left, right);
 
