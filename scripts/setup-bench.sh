@@ -3,6 +3,7 @@
 # Embree 3 and assimp (libraries, found by CMake) and the Debian packages whose meshes it loads, then prints where
 # the mesh files are.
 #   libembree-dev  Embree 3.13 (the reference)          libassimp-dev  assimp 5 (mesh loading: .3ds, .off, .ac, .obj)
+#   libtbb-dev     TBB (Embree's tasking: builds confined to N threads by a TBB arena)
 #   glmark2-data   the Stanford bunny (69,666 triangles)  libcgal-demo   CGAL's demo meshes (.off)
 #   torcs-data     TORCS race tracks (.ac): long thin triangles (about 330 MB download)
 # CGAL's meshes are extracted from the package's data tarball to $VKAS_BENCH_DATA (default ~/.cache/vkas-bench),
@@ -10,7 +11,7 @@
 # Usage: scripts/setup-bench.sh [--no-torcs] [extra-package ...]
 set -euo pipefail
 
-packages=(libembree-dev libassimp-dev glmark2-data libcgal-demo torcs-data)
+packages=(libembree-dev libtbb-dev libassimp-dev glmark2-data libcgal-demo torcs-data)
 if [[ "${1:-}" == --no-torcs ]]; then
   packages=("${packages[@]/torcs-data}")
   shift

@@ -1,5 +1,7 @@
 #include "embree_side.hpp"
 
+#include <oneapi/tbb/task_arena.h>
+
 #include <embree3/rtcore_builder.h>
 
 #include <cstring>
@@ -170,7 +172,13 @@ const char* embreeCallName(EmbreeCall c, bool anyHit) {
     return "?";
 }
 
-EmbreeEngine::EmbreeEngine(unsigned threads) {
+void EmbreeEngine::commit(RTCScene s) {
+    if (threads_ == 0) return rtcCommitScene(s);
+    tbb::task_arena arena{int(threads_)};
+    arena.execute([&] { rtcCommitScene(s); });
+}
+
+EmbreeEngine::EmbreeEngine(unsigned threads) : threads_(threads) {
     const std::string config = threads ? "threads=" + std::to_string(threads) : std::string();
     device_ = rtcNewDevice(config.c_str());
     if (!device_) throw std::runtime_error("rtcNewDevice failed");
@@ -221,7 +229,7 @@ EmbreeEngine::Build EmbreeEngine::buildMesh(const Mesh& mesh, RTCBuildQuality qu
         RTCScene s = meshScene(mesh, quality, quality, RTC_SCENE_FLAG_NONE, mesh.vertices.data());
         const int64_t before = memory_.load();
         const auto t0 = std::chrono::steady_clock::now();
-        rtcCommitScene(s);
+        commit(s);
         b.ms = std::min(b.ms, msSince(t0));
         b.bytes = memory_.load() - before;
         rtcReleaseScene(s);
@@ -235,7 +243,7 @@ EmbreeEngine::Build EmbreeEngine::refitMesh(const Mesh& mesh, const std::vector<
     RTCScene s = meshScene(mesh, RTC_BUILD_QUALITY_LOW, RTC_BUILD_QUALITY_REFIT,
                            RTCSceneFlags(RTC_SCENE_FLAG_DYNAMIC | RTC_SCENE_FLAG_ROBUST), vertices.data());
     const int64_t before = memory_.load();
-    rtcCommitScene(s);
+    commit(s);
     Build b{1e300, memory_.load() - before};
     RTCGeometry g = rtcGetGeometry(s, 0);
     const int runs = reps % 2 ? reps : reps + 1;
@@ -245,7 +253,7 @@ EmbreeEngine::Build EmbreeEngine::refitMesh(const Mesh& mesh, const std::vector<
         const auto t0 = std::chrono::steady_clock::now();
         rtcUpdateGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0);
         rtcCommitGeometry(g);
-        rtcCommitScene(s);
+        commit(s);
         b.ms = std::min(b.ms, msSince(t0));
     }
     rtcReleaseScene(s);
@@ -256,13 +264,13 @@ EmbreeEngine::Build EmbreeEngine::buildInstances(const Mesh& mesh, const std::ve
                                                  RTCBuildQuality quality, int reps) {
     RTCScene child = meshScene(mesh, RTC_BUILD_QUALITY_MEDIUM, RTC_BUILD_QUALITY_MEDIUM, RTC_SCENE_FLAG_ROBUST,
                                mesh.vertices.data());
-    rtcCommitScene(child);
+    commit(child);
     Build b{1e300, 0};
     for (int r = 0; r < reps; ++r) {
         RTCScene s = instanceScene(child, xs, quality, RTC_SCENE_FLAG_NONE);
         const int64_t before = memory_.load();
         const auto t0 = std::chrono::steady_clock::now();
-        rtcCommitScene(s);
+        commit(s);
         b.ms = std::min(b.ms, msSince(t0));
         b.bytes = memory_.load() - before;
         rtcReleaseScene(s);
@@ -275,12 +283,12 @@ EmbreeEngine::Build EmbreeEngine::recommitInstances(const Mesh& mesh, const std:
                                                     const std::vector<Transform>& moved, int reps) {
     RTCScene child = meshScene(mesh, RTC_BUILD_QUALITY_MEDIUM, RTC_BUILD_QUALITY_MEDIUM, RTC_SCENE_FLAG_ROBUST,
                                mesh.vertices.data());
-    rtcCommitScene(child);
+    commit(child);
     RTCScene s = instanceScene(child, xs, RTC_BUILD_QUALITY_LOW,
                                RTCSceneFlags(RTC_SCENE_FLAG_DYNAMIC | RTC_SCENE_FLAG_ROBUST));
     for (size_t i = 0; i < xs.size(); ++i) rtcSetGeometryBuildQuality(rtcGetGeometry(s, unsigned(i)), RTC_BUILD_QUALITY_REFIT);
     const int64_t before = memory_.load();
-    rtcCommitScene(s);
+    commit(s);
     Build b{1e300, memory_.load() - before};
     const int runs = reps % 2 ? reps : reps + 1;
     for (int r = 0; r < runs; ++r) {
@@ -291,7 +299,7 @@ EmbreeEngine::Build EmbreeEngine::recommitInstances(const Mesh& mesh, const std:
             rtcCommitGeometry(g);
         }
         const auto t0 = std::chrono::steady_clock::now();
-        rtcCommitScene(s);
+        commit(s);
         b.ms = std::min(b.ms, msSince(t0));
     }
     rtcReleaseScene(s);
@@ -324,14 +332,14 @@ void EmbreeEngine::makeTraceScene(const Scene& scene) {
     if (traceChild_) rtcReleaseScene(traceChild_), traceChild_ = nullptr;
     RTCScene mesh = meshScene(scene.mesh, RTC_BUILD_QUALITY_MEDIUM, RTC_BUILD_QUALITY_MEDIUM, RTC_SCENE_FLAG_ROBUST,
                               scene.mesh.vertices.data());
-    rtcCommitScene(mesh);
+    commit(mesh);
     if (!scene.manyInstances()) {
         traceScene_ = mesh;
         return;
     }
     traceChild_ = mesh;
     traceScene_ = instanceScene(mesh, scene.instances, RTC_BUILD_QUALITY_MEDIUM, RTC_SCENE_FLAG_ROBUST);
-    rtcCommitScene(traceScene_);
+    commit(traceScene_);
 }
 
 double EmbreeEngine::trace(EmbreeCall call, bool anyHit, bool coherent, const std::vector<VkasRay>& rays,

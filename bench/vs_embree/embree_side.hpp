@@ -23,7 +23,8 @@ public:
         int64_t bytes = 0;  // memory the committed scene holds (memory monitor, net of the build's temporaries)
     };
 
-    explicit EmbreeEngine(unsigned threads);  // rtcNewDevice("threads=N"); 0: Embree's default (all)
+    // rtcNewDevice("threads=N"); 0: Embree's default (all). Builds run on exactly N threads (a TBB arena of N).
+    explicit EmbreeEngine(unsigned threads);
     ~EmbreeEngine();
     EmbreeEngine(const EmbreeEngine&) = delete;
     EmbreeEngine& operator=(const EmbreeEngine&) = delete;
@@ -53,6 +54,11 @@ private:
     RTCScene instanceScene(RTCScene child, const std::vector<Transform>& xs, RTCBuildQuality quality,
                            RTCSceneFlags flags);
 
+    // rtcCommitScene inside a TBB arena of the engine's thread count: Embree's "threads=N" sets a process-wide TBB
+    // limit, so with a second device of more threads alive its builds would use those threads too.
+    void commit(RTCScene s);
+
+    unsigned threads_ = 0;
     RTCDevice device_ = nullptr;
     std::atomic<int64_t> memory_{0};
     RTCScene traceChild_ = nullptr, traceScene_ = nullptr;
