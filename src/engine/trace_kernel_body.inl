@@ -126,6 +126,12 @@ static inline void pushRef(KernelScratch& s, uint32_t& sp, format::ChildRef ref,
     }
 }
 
+// All four cache lines of a 256-byte node (boxes in the first three, child references in the last).
+static inline void prefetchNode(const format::Node* node) {
+    const char* p = reinterpret_cast<const char*>(node);
+    for (int line = 0; line < 4; ++line) _mm_prefetch(p + 64 * line, _MM_HINT_T0);
+}
+
 // Walks one structure from `root` with the stack above `base`, calling leafFn(ref) for its leaves. A hit child is
 // entered directly: the same as pushing it last and popping it at once (its entry distance passed the box test with
 // the current tMax, so the pop's pruning test would pass too).
@@ -146,6 +152,9 @@ static inline void walkTree(Walk& w, const format::Node* nodes, const ShearedRay
                 ref = format::kEmptyRef;
                 break;
             }
+            // Node and record loads are the cache misses of a traversal: ask for what the hit children need now.
+            for (uint32_t k = 0; k < hits; ++k)
+                if (format::isInternal(refs[k])) prefetchNode(nodes + format::nodeIndex(refs[k]));
             for (uint32_t k = 0; k + 1 < hits; ++k) pushRef(s, sp, refs[k], dist[k]);
             ref = refs[hits - 1];
         }
@@ -161,6 +170,11 @@ struct TriangleLeaves {
     Walk& w;
     const format::TriangleRecord* records;
     void operator()(format::ChildRef leaf, uint32_t) const { testTriangleLeaf(w, records, leaf); }
+    void prefetch(format::ChildRef leaf) const {
+        const char* p = reinterpret_cast<const char*>(records + format::leafFirst(leaf));
+        const char* end = p + sizeof(format::TriangleRecord) * format::leafCount(leaf);
+        for (; p < end; p += 64) _mm_prefetch(p, _MM_HINT_T0);
+    }
 };
 
 // The leaves of the top level: instances, each entered as traversal.cpp's enterInstance does.
@@ -177,6 +191,10 @@ struct InstanceLeaves {
         s.cachedReference = reference;
         s.cachedBlas = blas;
         return blas;
+    }
+
+    void prefetch(format::ChildRef leaf) const {
+        _mm_prefetch(reinterpret_cast<const char*>(instances + format::leafFirst(leaf)), _MM_HINT_T0);
     }
 
     void operator()(format::ChildRef leaf, uint32_t sp) const {
