@@ -126,12 +126,6 @@ static inline void pushRef(KernelScratch& s, uint32_t& sp, format::ChildRef ref,
     }
 }
 
-// All four cache lines of a 256-byte node (boxes in the first three, child references in the last).
-static inline void prefetchNode(const format::Node* node) {
-    const char* p = reinterpret_cast<const char*>(node);
-    for (int line = 0; line < 4; ++line) _mm_prefetch(p + 64 * line, _MM_HINT_T0);
-}
-
 // Walks one structure from `root` with the stack above `base`, calling leafFn(ref) for its leaves. A hit child is
 // entered directly: the same as pushing it last and popping it at once (its entry distance passed the box test with
 // the current tMax, so the pop's pruning test would pass too).

@@ -33,7 +33,8 @@ void push(RayQueryState& q, ChildRef ref, float dist) {
 }
 
 // Tests the children of one node and pushes the hit ones, farthest first so the nearest is popped next.
-void visitNode(RayQueryState& q, const Node& node, const ShearedRay& r) {
+void visitNode(RayQueryState& q, const Node* nodes, uint32_t index, const ShearedRay& r) {
+    const Node& node = nodes[index];
     float entry[kNodeWidth];
     // Only the children hit are visited, in slot order (bit scan), so the branches follow the hits, not the slots.
     uint32_t mask = childEntryDistances(node, r, q.tMin, q.tMax, entry);
@@ -53,7 +54,10 @@ void visitNode(RayQueryState& q, const Node& node, const ShearedRay& r) {
         dist[k] = tNear;
         ref[k] = node.child[i];
     }
-    for (uint32_t k = 0; k < hits; ++k) push(q, ref[k], dist[k]);
+    for (uint32_t k = 0; k < hits; ++k) {
+        if (isInternal(ref[k])) prefetchNode(nodes + nodeIndex(ref[k]));
+        push(q, ref[k], dist[k]);
+    }
 }
 
 // Enters `inst` with the world-to-object transform `worldToObject` (the record's own, or [NV-motion] the one
@@ -333,7 +337,7 @@ bool queryProceed(RayQueryState& q) {
         if (q.stackDist[q.sp] > q.tMax * kFarSlack) continue;  // behind the committed hit
         if (isInternal(ref)) {
             const std::byte* base = q.inBottomLevel ? q.bottomLevel : q.topLevel;
-            visitNode(q, nodes(base)[nodeIndex(ref)], q.inBottomLevel ? q.objectRay : q.worldRay);
+            visitNode(q, nodes(base), nodeIndex(ref), q.inBottomLevel ? q.objectRay : q.worldRay);
         } else if (isLeaf(ref)) {
             if (q.inBottomLevel) {
                 q.bottomLeafNext = leafFirst(ref);
