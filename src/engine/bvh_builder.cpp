@@ -32,6 +32,16 @@ uint64_t maxWideNodeCount(uint64_t n, uint32_t maxLeafSize) {
 namespace {
 
 constexpr int kBins = 32;
+
+// The bins per axis for a range of `count` primitives: 32 for large ranges; below kFewBinsBelow primitives 8 (or
+// as many as primitives, at least 4). Most splits are of small ranges, and clearing and sweeping the bins costs
+// them more than binning their primitives; 8 bins there cost about 1% of SAH cost.
+constexpr uint32_t kFewBinsBelow = 4096;
+constexpr uint32_t kFewBins = 8;
+inline uint32_t binCountFor(uint32_t count) {
+    return count < kFewBinsBelow ? std::max<uint32_t>(4, std::min(count, kFewBins)) : uint32_t(kBins);
+}
+
 // Ranges of at least this many primitives are partitioned stably through a spare array (WideBuilder::stablePartition).
 constexpr uint32_t kStablePartitionMin = 65536;
 
@@ -39,15 +49,8 @@ struct Range {
     uint32_t begin = 0, end = 0;
     uint32_t depth = 0;
     Aabb bounds;
-    Aabb centroids;  // bounds of (lower + upper), i.e. twice the centroids
     uint32_t count() const { return end - begin; }
 };
-
-inline Vec3 refLower(const PrimRef& r) { return {r.lower[0], r.lower[1], r.lower[2]}; }
-inline Vec3 refUpper(const PrimRef& r) { return {r.upper[0], r.upper[1], r.upper[2]}; }
-inline Vec3 refCentroid2(const PrimRef& r) {
-    return {r.lower[0] + r.upper[0], r.lower[1] + r.upper[1], r.lower[2] + r.upper[2]};
-}
 
 class WideBuilder {
 public:
@@ -150,8 +153,8 @@ private:
         }
     };
     struct RangeBounds {
-        Box4 bounds, centroids;
-        void merge(const RangeBounds& o) { bounds.extend(o.bounds), centroids.extend(o.centroids); }
+        Box4 bounds;
+        void merge(const RangeBounds& o) { bounds.extend(o.bounds); }
     };
 
     // A primitive's bounds from its PrimRef (lane 3, the index, cleared).
@@ -184,12 +187,9 @@ private:
                 __m128 lo, up;
                 load(refs_[i], lo, up);
                 local.bounds.extend(lo, up);
-                const __m128 c = _mm_add_ps(lo, up);
-                local.centroids.extend(c, c);
             }
         }, rb, RangeBounds{});
         r.bounds = rb.bounds.aabb();
-        r.centroids = rb.centroids.aabb();
     }
 
     void halve(const Range& r, Range& left, Range& right) {
@@ -202,15 +202,16 @@ private:
     }
 
     void split(const Range& r, Range& left, Range& right) {
-        Vec3 cl = r.centroids.lower, cu = r.centroids.upper;
+        // The bins divide the range's bounds, doubled (lower + upper, twice a centroid, lies within them): the
+        // children's bounds come from the bins, so no pass gathers centroid bounds. Ranges that are one point are
+        // halved; ranges whose centroids coincide fall into one bin and are halved below.
+        Vec3 cl = r.bounds.lower + r.bounds.lower, cu = r.bounds.upper + r.bounds.upper;
         Vec3 extent = cu - cl;
         if (r.depth >= format::kSahDepthLimit || !(extent.x > 0 || extent.y > 0 || extent.z > 0)) {
             return halve(r, left, right);
         }
-        // Few primitives need few bins: clearing and sweeping 32 bins would cost more than binning them.
-        const int binCount =
-            int(std::min<uint32_t>(std::min<uint32_t>(kBins, settings_.binCount), std::max<uint32_t>(4, r.count())));
-        // The axes binned: all three, or only the one of the largest centroid extent.
+        const int binCount = int(std::min<uint32_t>(settings_.binCount, binCountFor(r.count())));
+        // The axes binned: all three, or only the one of the largest extent.
         int axes[3] = {0, 1, 2}, axisCount = 3;
         if (settings_.largestAxisOnly) {
             axes[0] = extent.x >= extent.y && extent.x >= extent.z ? 0 : extent.y >= extent.z ? 1 : 2;
@@ -289,9 +290,13 @@ private:
             }
         }
         if (bestAxis < 0) return halve(r, left, right);
+        // The children's bounds: the bins on either side of the split, exactly the primitives' (min / max of the
+        // same values).
+        Box4 leftBox, rightBox;
+        for (int b = 0; b < binCount; ++b)
+            (b <= bestBin ? leftBox : rightBox).extend(bins.bounds[bestAxis][b].lower, bins.bounds[bestAxis][b].upper);
 
-        // Partition in place (primitives in bins <= bestBin go left), gathering each side's bounds and centroid
-        // bounds on the way: the children need no further pass.
+        // Partition (primitives in bins <= bestBin go left).
         // bin <= bestBin, decided on the split axis alone: the bin is trunc(clamp(f, 0, last)) with NaN in bin 0, and
         // bestBin + 1 <= last, so it is !(f >= bestBin + 1) with f computed as binsOf computes it.
         const __m128 splitLimit = _mm_set1_ps(float(bestBin + 1));
@@ -300,42 +305,27 @@ private:
             const __m128 f = _mm_mul_ps(_mm_sub_ps(_mm_add_ps(lo, up), origin), scale4);
             return (_mm_movemask_ps(_mm_cmpge_ps(f, splitLimit)) & axisBit) == 0;
         };
-        RangeBounds lb, rb;
-        auto add = [](RangeBounds& side, __m128 lo, __m128 up) {
-            side.bounds.extend(lo, up);
-            const __m128 c = _mm_add_ps(lo, up);
-            side.centroids.extend(c, c);
-        };
+        // Large ranges: stably through the spare array, in chunks that may run on several threads, each side's
+        // bounds gathered on the way (merged in chunk order: the same bytes with threads or without).
+        auto add = [](RangeBounds& side, __m128 lo, __m128 up) { side.bounds.extend(lo, up); };
         if (spare_ && r.count() >= kStablePartitionMin) return stablePartition(r, goesLeft, add, left, right);
-        uint32_t i = r.begin, j = r.end;
-        for (;;) {
-            __m128 lo, up;
-            while (i < j) {
-                load(refs_[i], lo, up);
-                if (!goesLeft(lo, up)) break;
-                add(lb, lo, up);
-                ++i;
-            }
-            __m128 lo2, up2;
-            while (i < j) {
-                load(refs_[j - 1], lo2, up2);
-                if (goesLeft(lo2, up2)) break;
-                add(rb, lo2, up2);
-                --j;
-            }
-            if (i >= j) break;
-            // refs_[i] goes right and refs_[j - 1] left: swap them.
-            std::swap(refs_[i], refs_[j - 1]);
-            add(lb, lo2, up2);
-            add(rb, lo, up);
-            ++i;
-            --j;
+        // In place, without branches on the side (which is close to random near the leaves): every primitive is
+        // swapped with the first one not known to go left, which moves it there if it goes left and leaves the
+        // order of [begin, l) left, [l, i) right otherwise. The bounds come from the bins.
+        uint32_t l = r.begin;
+        for (uint32_t i = r.begin; i < r.end; ++i) {
+            const __m128 p0 = _mm_loadu_ps(refs_[i].lower), p1 = _mm_loadu_ps(refs_[i].upper);
+            const uint32_t toLeft = goesLeft(xyz(p0), xyz(p1));
+            const __m128 q0 = _mm_loadu_ps(refs_[l].lower), q1 = _mm_loadu_ps(refs_[l].upper);
+            _mm_storeu_ps(refs_[i].lower, q0), _mm_storeu_ps(refs_[i].upper, q1);
+            _mm_storeu_ps(refs_[l].lower, p0), _mm_storeu_ps(refs_[l].upper, p1);
+            l += toLeft;
         }
-        left.begin = r.begin, left.end = i;
-        right.begin = i, right.end = r.end;
+        left.begin = r.begin, left.end = l;
+        right.begin = l, right.end = r.end;
         left.depth = right.depth = r.depth + 1;
-        left.bounds = lb.bounds.aabb(), left.centroids = lb.centroids.aabb();
-        right.bounds = rb.bounds.aabb(), right.centroids = rb.centroids.aabb();
+        left.bounds = leftBox.aabb();
+        right.bounds = rightBox.aabb();
     }
 
     static constexpr uint32_t kPartitionChunk = 16384;
@@ -397,8 +387,8 @@ private:
         left.begin = r.begin, left.end = r.begin + leftTotal;
         right.begin = left.end, right.end = r.end;
         left.depth = right.depth = r.depth + 1;
-        left.bounds = lb.bounds.aabb(), left.centroids = lb.centroids.aabb();
-        right.bounds = rb.bounds.aabb(), right.centroids = rb.centroids.aabb();
+        left.bounds = lb.bounds.aabb();
+        right.bounds = rb.bounds.aabb();
     }
 
     PrimRef* refs_;
@@ -505,25 +495,20 @@ BvhBuildResult buildWideBvh(PrimRef* refs, uint32_t n, const BvhBuildSettings& s
     // The root's bounds, in chunks on several threads for a parallel build (min/max: the same in any order).
     constexpr uint32_t kBoundsChunk = 65536;
     const uint32_t chunks = (n + kBoundsChunk - 1) / kBoundsChunk;
-    std::vector<Box4> bounds(chunks), centroids(chunks);
+    std::vector<Box4> bounds(chunks);
     auto boundChunk = [&](uint32_t c) {
-        Box4 b, cb;
-        for (uint32_t i = c * kBoundsChunk, end = std::min(n, (c + 1) * kBoundsChunk); i < end; ++i) {
-            const __m128 lo = xyz(_mm_loadu_ps(refs[i].lower)), up = xyz(_mm_loadu_ps(refs[i].upper));
-            b.extend(lo, up);
-            const __m128 ctr = _mm_add_ps(lo, up);
-            cb.extend(ctr, ctr);
-        }
-        bounds[c] = b, centroids[c] = cb;
+        Box4 b;
+        for (uint32_t i = c * kBoundsChunk, end = std::min(n, (c + 1) * kBoundsChunk); i < end; ++i)
+            b.extend(xyz(_mm_loadu_ps(refs[i].lower)), xyz(_mm_loadu_ps(refs[i].upper)));
+        bounds[c] = b;
     };
     if (parallel && chunks > 1)
         (*parallel)(chunks, boundChunk);
     else
         for (uint32_t c = 0; c < chunks; ++c) boundChunk(c);
-    Box4 b, cb;
-    for (uint32_t c = 0; c < chunks; ++c) b.extend(bounds[c].lower, bounds[c].upper), cb.extend(centroids[c].lower, centroids[c].upper);
+    Box4 b;
+    for (uint32_t c = 0; c < chunks; ++c) b.extend(bounds[c].lower, bounds[c].upper);
     all.bounds = b.aabb();
-    all.centroids = cb.aabb();
     result.bounds = all.bounds;
     // Builds with large ranges partition those through a spare array, with threads or without: the same tree.
     std::unique_ptr<PrimRef[]> spare;

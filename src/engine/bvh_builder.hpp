@@ -23,7 +23,7 @@ static_assert(sizeof(PrimRef) == 32);
 struct BvhBuildSettings {
     uint32_t maxLeafSize;        // ranges of at most this many primitives become leaves
     uint32_t binCount = 32;      // SAH bins per axis (at most 32)
-    bool largestAxisOnly = false;  // bin only along the axis of the largest centroid extent (faster, coarser)
+    bool largestAxisOnly = false;  // bin only along the axis of the largest extent (faster, coarser)
     bool morton = false;  // build with the Morton-code builder (engine/morton_builder.hpp) instead of the SAH
 };
 
