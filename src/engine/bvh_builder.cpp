@@ -18,6 +18,9 @@ using format::Node;
 BvhBuildSettings buildSettingsFor(uint32_t maxLeafSize, uint32_t buildFlags) {
     BvhBuildSettings s{maxLeafSize};
     if (buildFlags & VK_BUILD_ACCELERATION_STRUCTURE_PREFER_FAST_BUILD_BIT_KHR) s.morton = true;
+    if ((buildFlags & VK_BUILD_ACCELERATION_STRUCTURE_PREFER_FAST_TRACE_BIT_KHR) ||
+        maxLeafSize == format::kMaxInstancesPerLeaf)
+        s.fewBinsBelow = 0;
     return s;
 }
 
@@ -33,13 +36,13 @@ namespace {
 
 constexpr int kBins = 32;
 
-// The bins per axis for a range of `count` primitives: 32 for large ranges; below kFewBinsBelow primitives 8 (or
-// as many as primitives, at least 4). Most splits are of small ranges, and clearing and sweeping the bins costs
-// them more than binning their primitives; 8 bins there cost about 1% of SAH cost.
-constexpr uint32_t kFewBinsBelow = 4096;
+// The bins per axis for a range of `count` primitives: 32 for large ranges; below `fewBinsBelow` primitives
+// (BvhBuildSettings) 8, or as many as primitives, at least 4. Most splits are of small ranges, and clearing and
+// sweeping the bins costs them more than binning their primitives; 8 bins there cost about 1% of SAH cost.
 constexpr uint32_t kFewBins = 8;
-inline uint32_t binCountFor(uint32_t count) {
-    return count < kFewBinsBelow ? std::max<uint32_t>(4, std::min(count, kFewBins)) : uint32_t(kBins);
+inline uint32_t binCountFor(uint32_t count, uint32_t fewBinsBelow) {
+    if (count < fewBinsBelow) return std::max<uint32_t>(4, std::min(count, kFewBins));
+    return std::max<uint32_t>(4, std::min<uint32_t>(count, kBins));
 }
 
 // Ranges of at least this many primitives are partitioned stably through a spare array (WideBuilder::stablePartition).
@@ -210,7 +213,7 @@ private:
         if (r.depth >= format::kSahDepthLimit || !(extent.x > 0 || extent.y > 0 || extent.z > 0)) {
             return halve(r, left, right);
         }
-        const int binCount = int(std::min<uint32_t>(settings_.binCount, binCountFor(r.count())));
+        const int binCount = int(std::min<uint32_t>(settings_.binCount, binCountFor(r.count(), settings_.fewBinsBelow)));
         // The axes binned: all three, or only the one of the largest extent.
         int axes[3] = {0, 1, 2}, axisCount = 3;
         if (settings_.largestAxisOnly) {
