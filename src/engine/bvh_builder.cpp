@@ -414,9 +414,9 @@ struct Subtree {
     uint64_t totalNodes = 0;
 };
 
-// Ranges at or below this many primitives become independent tasks: large enough to amortise a task, small
-// enough that a million primitives give hundreds of them.
-constexpr uint32_t kParallelGrain = 2048;
+// Ranges at or below this many primitives become independent tasks: large enough to amortise a task (2,048 made
+// 16-thread builds of 4M triangles 15-30% slower), small enough that a million primitives give about a hundred.
+constexpr uint32_t kParallelGrain = 8192;
 
 // Builds the tree over r in parallel: the first node (and any child range over half of r) here, each other child
 // range as a task that does the same, down to kParallelGrain.
