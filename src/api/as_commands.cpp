@@ -550,7 +550,8 @@ void checkBuildInfo(Validator& v, const Device& dev, const VkAccelerationStructu
         if (updateSrc) footprint.src = fromHandle<AccelerationStructure>(info.srcAccelerationStructure);
     }
     if (info.pGeometries == nullptr && info.ppGeometries == nullptr && info.geometryCount != 0) return;
-    if (!ranges || info.geometryCount > limits::kMaxGeometryCount) return;
+    // A build of no geometries may pass no range array; everything below still applies to it (the destination's size).
+    if ((!ranges && info.geometryCount != 0) || info.geometryCount > limits::kMaxGeometryCount) return;
     uint64_t total = 0;
     for (uint32_t g = 0; g < info.geometryCount; ++g) total += ranges[g].primitiveCount;
     if (info.type == VK_ACCELERATION_STRUCTURE_TYPE_BOTTOM_LEVEL_KHR) {

@@ -315,6 +315,19 @@ void addBuildCases(std::vector<Case>& c) {
         (void)vk;
         (void)dev;
     });
+    // Found by the build fuzzer: with no geometries and no range array, the size check was skipped.
+    CASE_V("VUID-vkBuildAccelerationStructuresKHR-pInfos-10126", "no_geometries_no_ranges", {
+        auto pb = t.triangleBuild();
+        pb->info.geometryCount = 0;
+        pb->info.pGeometries = nullptr;
+        pb->info.ppGeometries = nullptr;
+        pb->info.dstAccelerationStructure =
+            t.createAccelStruct(VK_ACCELERATION_STRUCTURE_TYPE_BOTTOM_LEVEL_KHR, 128, {})->handle;
+        t.call([&] {
+            const VkAccelerationStructureBuildRangeInfoKHR* noRanges = nullptr;
+            return R(vk.vkBuildAccelerationStructuresKHR(dev, VK_NULL_HANDLE, 1, &pb->info, &noRanges));
+        });
+    });
     CASE("VUID-vkBuildAccelerationStructuresKHR-pInfos-12244", {
         auto pb = t.triangleBuild();
         pb->info.scratchData.hostAddress = nullptr;
