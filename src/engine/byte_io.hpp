@@ -20,4 +20,10 @@ inline uint32_t load32(const std::byte* p) {
 }
 inline void store64(std::byte* p, uint64_t v) { std::memcpy(p, &v, sizeof v); }
 
+// An application address moved by an offset, or null for a null address: a geometry with no primitives may give no
+// data, and offsetting a null pointer is undefined behaviour even when nothing is read.
+inline const std::byte* offsetAddress(const void* base, uint64_t offset) {
+    return base ? static_cast<const std::byte*>(base) + offset : nullptr;
+}
+
 }  // namespace vkas

@@ -1,5 +1,7 @@
 #include "engine/geometry_fetch.hpp"
 
+#include "engine/byte_io.hpp"
+
 #include <cmath>
 
 #include "engine/vertex_format.hpp"
@@ -20,15 +22,15 @@ TriangleSource::TriangleSource(const VkAccelerationStructureGeometryTrianglesDat
                   : format_ == VK_FORMAT_R32G32_SFLOAT ? TriangleVertexKind::Float2
                                                        : TriangleVertexKind::Other),
       count_(range.primitiveCount) {
-    auto* vertexBase = static_cast<const std::byte*>(data.vertexData.hostAddress);
+    const void* vertexBase = data.vertexData.hostAddress;
     if (indexType_ == VK_INDEX_TYPE_NONE_KHR) {
         // Non-indexed: primitiveOffset and firstVertex both move the first vertex.
-        vertices_ = vertexBase + range.primitiveOffset + stride_ * range.firstVertex;
+        vertices_ = offsetAddress(vertexBase, range.primitiveOffset + stride_ * uint64_t(range.firstVertex));
         indices_ = nullptr;
     } else {
         // Indexed: primitiveOffset moves the indices only; firstVertex is added to every index.
-        vertices_ = vertexBase + stride_ * range.firstVertex;
-        indices_ = static_cast<const std::byte*>(data.indexData.hostAddress) + range.primitiveOffset;
+        vertices_ = offsetAddress(vertexBase, stride_ * uint64_t(range.firstVertex));
+        indices_ = offsetAddress(data.indexData.hostAddress, range.primitiveOffset);
     }
     if (hasTransform_) {
         float m[3][4];
@@ -52,7 +54,7 @@ bool TriangleSource::fetch(uint32_t i, float v[3][3]) const {
 
 AabbSource::AabbSource(const VkAccelerationStructureGeometryAabbsDataKHR& data,
                        const VkAccelerationStructureBuildRangeInfoKHR& range)
-    : data_(static_cast<const std::byte*>(data.data.hostAddress) + range.primitiveOffset),
+    : data_(offsetAddress(data.data.hostAddress, range.primitiveOffset)),
       stride_(data.stride),
       count_(range.primitiveCount) {}
 
@@ -69,7 +71,7 @@ bool isInvertedAabb(const float lower[3], const float upper[3]) {
 
 InstanceSource::InstanceSource(const VkAccelerationStructureGeometryInstancesDataKHR& data,
                                const VkAccelerationStructureBuildRangeInfoKHR& range)
-    : data_(static_cast<const std::byte*>(data.data.hostAddress) + range.primitiveOffset),
+    : data_(offsetAddress(data.data.hostAddress, range.primitiveOffset)),
       arrayOfPointers_(data.arrayOfPointers == VK_TRUE),
       count_(range.primitiveCount) {}
 

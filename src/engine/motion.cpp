@@ -1,5 +1,7 @@
 #include "engine/motion.hpp"
 
+#include "engine/byte_io.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <cstring>
@@ -120,7 +122,7 @@ void instanceBounds(uint32_t type, const float staticTransform[3][4], const floa
 
 MotionInstanceSource::MotionInstanceSource(const VkAccelerationStructureGeometryInstancesDataKHR& data,
                                            const VkAccelerationStructureBuildRangeInfoKHR& range)
-    : data_(static_cast<const std::byte*>(data.data.hostAddress) + range.primitiveOffset),
+    : data_(offsetAddress(data.data.hostAddress, range.primitiveOffset)),
       arrayOfPointers_(data.arrayOfPointers == VK_TRUE),
       count_(range.primitiveCount) {}
 

@@ -1,5 +1,7 @@
 #include "engine/sphere_fetch.hpp"
 
+#include "engine/byte_io.hpp"
+
 #include <cmath>
 #include <cstring>
 
@@ -100,11 +102,11 @@ SweptSpheresSource::SweptSpheresSource(const SweptSpheresData& data,
         // primitiveOffset moves the indices only.
         vertices_ = data.vertexData;
         radii_ = data.radiusData;
-        indices_ = data.indexData + range.primitiveOffset;
+        indices_ = offsetAddress(data.indexData, range.primitiveOffset);
     } else {
         // primitiveOffset moves both the position and the radius buffer.
-        vertices_ = data.vertexData + range.primitiveOffset;
-        radii_ = data.radiusData + range.primitiveOffset;
+        vertices_ = offsetAddress(data.vertexData, range.primitiveOffset);
+        radii_ = offsetAddress(data.radiusData, range.primitiveOffset);
         indices_ = nullptr;
     }
 }
