@@ -259,22 +259,6 @@ TEST_F(build_fast_build, nonfinite_and_extreme_coordinates) {
     }
 }
 
-// Inactive (NaN X) and degenerate triangles are dropped before the build, so the kept triangles' record slots are
-// not their positions: the record order the Morton builder hands back must still name the right records.
-TEST_F(build_fast_build, dropped_primitives) {
-    constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
-    for (int n : {9, 200, 20000}) {
-        SCOPED_TRACE(testing::Message() << n << " triangles");
-        Mesh mesh = triangleSoup(n, rng, 0.2f);
-        for (int t = 0; t < n; ++t) {
-            if (rng.coin(0.2)) mesh.positions[mesh.indices[3 * t]][0] = kNaN;  // inactive
-            else if (rng.coin(0.1)) mesh.positions[mesh.indices[3 * t + 2]] = mesh.positions[mesh.indices[3 * t]];
-        }
-        buildAndCheck(mesh, 200);
-        if (HasFailure()) return;
-    }
-}
-
 // The same input gives the same bytes, build after build (no dependence on addresses or leftover memory).
 TEST_F(build_fast_build, same_input_same_bytes) {
     const Mesh mesh = triangleSoup(30000, rng, 0.1f);

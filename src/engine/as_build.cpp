@@ -1,7 +1,5 @@
 #include "engine/as_build.hpp"
 
-#include <immintrin.h>
-
 #include <algorithm>
 #include <cmath>
 #include <cstring>
@@ -11,7 +9,6 @@
 #include "engine/bvh_builder.hpp"
 #include "engine/format.hpp"
 #include "engine/geometry_fetch.hpp"
-#include "engine/morton_builder.hpp"
 #include "engine/motion.hpp"
 #include "engine/refit.hpp"
 #include "engine/sphere_fetch.hpp"
@@ -312,47 +309,11 @@ VkResult buildBottomLevel(const BuildJob& job) {
     StructureLayout pre = structureLayout(StructureType::BottomLevel, info.geometryCount, 0, 0);
     auto* nodes = reinterpret_cast<Node*>(job.dst + pre.nodeOffset);
     const BvhBuildSettings settings = buildSettingsFor(maxLeafSize(StructureType::BottomLevel), info.flags);
-    BvhBuildResult tree;
-    // PREFER_FAST_BUILD: the Morton builder leaves refs in place and gives the record order. Its 2n sort keys live
-    // in the destination, past the largest node section any build of `total` primitives can write (total records of
-    // at least 16 bytes fit there: the structure size check above), where nothing is read afterwards; no temporary
-    // allocation, no page faults. The order then moves into the refs (no longer needed) for the record copy, which
-    // overwrites that part of the destination.
-    const uint32_t* order = nullptr;
-    if (settings.morton && n != 0) {
-        static_assert(sizeof(TriangleRecord) >= 2 * sizeof(uint64_t) && sizeof(AabbRecord) >= 2 * sizeof(uint64_t));
-        const StructureLayout worstLayout = structureLayout(
-            StructureType::BottomLevel, info.geometryCount,
-            maxWideNodeCount(total, maxLeafSize(StructureType::BottomLevel)), total, motion);
-        auto* work = reinterpret_cast<uint64_t*>(job.dst + worstLayout.recordOffset);
-        tree = buildMortonBvhOrder(refs, n, settings.maxLeafSize, nodes, work);
-        auto* leafOrder = reinterpret_cast<uint32_t*>(refs);
-        for (uint32_t i = 0; i < n; ++i) leafOrder[i] = uint32_t(work[i]);
-        order = leafOrder;
-    } else {
-        tree = buildWideBvh(refs, n, settings, nodes, job.parallel);
-    }
+    BvhBuildResult tree = buildWideBvh(refs, n, settings, nodes, job.parallel);
     StructureLayout layout =
         structureLayout(StructureType::BottomLevel, info.geometryCount, tree.nodeCount, n, motion);
     std::byte* records = job.dst + layout.recordOffset;
     auto copyRecords = [&](uint32_t begin, uint32_t end) {
-        if (order) {
-            constexpr uint32_t kAhead = 8;  // records are read in leaf order: random addresses
-            for (uint32_t i = begin; i < end; ++i) {
-                if (i + kAhead < end) {
-                    const char* ahead = reinterpret_cast<const char*>(temp + uint64_t(order[i + kAhead]) * kRecordSize);
-                    _mm_prefetch(ahead, _MM_HINT_T0);
-                    _mm_prefetch(ahead + kRecordSize - 1, _MM_HINT_T0);
-                }
-                if (kRecordSize == sizeof(TriangleRecord))  // a fixed-size copy: no call
-                    std::memcpy(records + uint64_t(i) * sizeof(TriangleRecord),
-                                temp + uint64_t(order[i]) * sizeof(TriangleRecord), sizeof(TriangleRecord));
-                else
-                    std::memcpy(records + uint64_t(i) * kRecordSize, temp + uint64_t(order[i]) * kRecordSize,
-                                kRecordSize);
-            }
-            return;
-        }
         for (uint32_t i = begin; i < end; ++i)
             std::memcpy(records + uint64_t(i) * kRecordSize, temp + uint64_t(refs[i].index) * kRecordSize,
                         kRecordSize);

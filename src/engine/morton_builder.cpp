@@ -3,7 +3,6 @@
 #include <immintrin.h>
 
 #include <algorithm>
-#include <bit>
 #include <cstring>
 #include <limits>
 #include <memory>
@@ -25,7 +24,8 @@ constexpr uint32_t kMaxAxisBits = 14;
 // caches and TLB), then each bucket, now small enough to stay in cache, by 8-bit digits of the rest.
 constexpr uint32_t kTopBits = 10;
 constexpr uint32_t kLowDigitBits = 8;
-constexpr uint32_t kInsertionSortMax = 16;  // runs up to this size: insertion sort beats another digit
+constexpr uint32_t kMaxLowPasses = (3 * kMaxAxisBits - kTopBits + kLowDigitBits - 1) / kLowDigitBits;
+constexpr uint32_t kInsertionSortMax = 48;  // buckets up to this size: insertion sort beats counting passes
 
 // bits[v]: the 7 bits of v moved apart to bits 0, 3, 6, ..., 18. Two lookups spread 14 bits.
 struct SpreadTable {
@@ -126,6 +126,11 @@ struct KeyLayout {
     uint32_t topDigit(uint64_t key) const {
         return uint32_t(key >> (indexBits + codeBits() - kTopBits)) & ((1u << kTopBits) - 1);
     }
+    // Digit p (from the lowest) of the code bits below the top digit.
+    uint32_t lowDigit(uint64_t key, uint32_t p) const {
+        return uint32_t(key >> (indexBits + p * kLowDigitBits)) & ((1u << kLowDigitBits) - 1);
+    }
+    uint32_t lowPasses() const { return (codeBits() - kTopBits + kLowDigitBits - 1) / kLowDigitBits; }
 
     explicit KeyLayout(uint32_t n) {
         indexBits = 1;
@@ -146,59 +151,35 @@ void makeKeys(const PrimRef* refs, uint32_t begin, uint32_t end, const Quantizer
     }
 }
 
-// Sorts keys[0, n) (unique keys) by their code bits below bit `shift` (the bits above are equal within the range)
-// into out[0, n), where out is `in` or `other` (n keys each; the other one is scratch). MSD radix: one counting
-// pass and one stable scatter per 8-bit digit, then each digit's run on its own, so a bucket of m keys costs about
-// 2m per level and the small runs it leaves (a few keys each) go to insertion sort. Digits that are the same for
-// every key of a run cost one counting pass and no scatter. Keys are unique: any sort gives the same order.
-void sortRange(uint64_t* in, uint64_t* other, uint64_t* out, uint32_t n, uint32_t shift, uint32_t indexBits) {
+// Sorts the keys of one top-digit bucket, given in src[0, n), into dst[0, n) (tmp: n more keys). Stable LSD
+// passes over the remaining code digits (the index bits below are in order already), skipping digits that are
+// the same for every key; small buckets by insertion sort (keys are unique: any sort gives the same order).
+void sortBucket(uint64_t* src, uint64_t* dst, uint64_t* tmp, uint32_t n, const KeyLayout& layout) {
     if (n <= kInsertionSortMax) {
-        if (in == out) {
-            for (uint32_t i = 1; i < n; ++i) {
-                const uint64_t key = in[i];
-                uint32_t j = i;
-                for (; j > 0 && in[j - 1] > key; --j) in[j] = in[j - 1];
-                in[j] = key;
-            }
-        } else {
-            for (uint32_t i = 0; i < n; ++i) {
-                const uint64_t key = in[i];
-                uint32_t j = i;
-                for (; j > 0 && out[j - 1] > key; --j) out[j] = out[j - 1];
-                out[j] = key;
-            }
-        }
-        return;
-    }
-    // The keys of one code are in index order already (every pass is stable, and the input is in index order).
-    while (shift > indexBits) {
-        // Digits of up to 8 bits, fewer for small runs (a digit value per few keys: the counts stay cheap).
-        const uint32_t width = std::max(3u, uint32_t(std::bit_width(n)) - 3u);
-        const uint32_t bits = std::min({kLowDigitBits, shift - indexBits, width});
-        shift -= bits;
-        const uint32_t mask = (1u << bits) - 1;
-        uint32_t count[1u << kLowDigitBits];
-        std::memset(count, 0, sizeof(uint32_t) << bits);
-        for (uint32_t i = 0; i < n; ++i) count[uint32_t(in[i] >> shift) & mask]++;
-        if (count[uint32_t(in[0] >> shift) & mask] == n) continue;  // one digit value: nothing to move
-        uint32_t offset[1u << kLowDigitBits];
-        uint32_t sum = 0;
-        for (uint32_t d = 0; d <= mask; ++d) offset[d] = sum, sum += count[d];
         for (uint32_t i = 0; i < n; ++i) {
-            const uint64_t key = in[i];
-            other[offset[uint32_t(key >> shift) & mask]++] = key;
-        }
-        // Runs now lie in `other`; `in` is their scratch.
-        uint32_t begin = 0;
-        for (uint32_t d = 0; d <= mask; ++d) {
-            const uint32_t c = count[d];
-            if (c == 1) out[begin] = other[begin];
-            else if (c > 1) sortRange(other + begin, in + begin, out + begin, c, shift, indexBits);
-            begin += c;
+            const uint64_t key = src[i];
+            uint32_t j = i;
+            for (; j > 0 && dst[j - 1] > key; --j) dst[j] = dst[j - 1];
+            dst[j] = key;
         }
         return;
     }
-    if (in != out) std::memcpy(out, in, n * sizeof(uint64_t));
+    constexpr uint32_t kDigits = 1u << kLowDigitBits;
+    const uint32_t passes = layout.lowPasses();
+    uint32_t count[kMaxLowPasses][kDigits] = {};
+    for (uint32_t i = 0; i < n; ++i)
+        for (uint32_t p = 0; p < passes; ++p) count[p][layout.lowDigit(src[i], p)]++;
+    uint64_t* from = src;
+    for (uint32_t p = 0; p < passes; ++p) {
+        if (count[p][layout.lowDigit(from[0], p)] == n) continue;
+        uint64_t* to = from == dst ? tmp : dst;
+        uint32_t offset[kDigits];
+        uint32_t sum = 0;
+        for (uint32_t d = 0; d < kDigits; ++d) offset[d] = sum, sum += count[p][d];
+        for (uint32_t i = 0; i < n; ++i) to[offset[layout.lowDigit(from[i], p)]++] = from[i];
+        from = to;
+    }
+    if (from != dst) std::memcpy(dst, from, n * sizeof(uint64_t));
 }
 
 // A range [begin, end) of the sorted primitives and the binary splits above it.
@@ -207,18 +188,13 @@ struct Range {
     uint32_t count() const { return end - begin; }
 };
 
-// Builds the tree top-down over the sorted keys; bounds come back up from the leaves. A leaf reads the bounds of
-// its primitives from refs[key's index] and then overwrites its keys with what the caller reorders by: the refs
-// index, or with recordIndex the ref's own `index` field. Only the leaf's own keys are overwritten, and no range
-// to its right reads them (a node splits its whole range before its children are built).
+// Builds the tree top-down over the sorted keys; bounds come back up from the leaves. Leaves copy their sorted
+// references into the output array (the contract: leaves are ranges of refs).
 class TreeWriter {
 public:
-    // bucketBegin[d]: the first sorted position whose code's top kTopBits bits (those at topShift and above) are d.
-    TreeWriter(uint64_t* keys, uint32_t n, uint32_t indexBits, uint32_t topShift, const uint32_t* bucketBegin,
-               const PrimRef* refs, bool recordIndex, Node* nodes, uint32_t maxLeafSize)
-        : keys_(keys), n_(n), indexBits_(indexBits), indexMask_((uint64_t(1) << indexBits) - 1), topShift_(topShift),
-          bucketBegin_(bucketBegin), refs_(refs), recordIndex_(recordIndex), nodes_(nodes),
-          maxLeafSize_(maxLeafSize) {}
+    TreeWriter(const uint64_t* keys, uint32_t indexBits, const PrimRef* sorted, PrimRef* out, Node* nodes,
+               uint32_t maxLeafSize)
+        : keys_(keys), indexBits_(indexBits), sorted_(sorted), out_(out), nodes_(nodes), maxLeafSize_(maxLeafSize) {}
 
     ChildRef build(const Range& r, Box4& box) {
         if (r.count() <= maxLeafSize_) return leaf(r, box);
@@ -263,16 +239,11 @@ public:
 
 private:
     ChildRef leaf(const Range& r, Box4& box) {
-        constexpr uint32_t kAhead = 16;  // the references are read in key order: random addresses
         for (uint32_t i = r.begin; i < r.end; ++i) {
-            if (i + kAhead < n_)
-                _mm_prefetch(reinterpret_cast<const char*>(refs_ + (keys_[i + kAhead] & indexMask_)), _MM_HINT_T0);
-            const uint32_t index = uint32_t(keys_[i] & indexMask_);
-            const PrimRef& ref = refs_[index];
             __m128 lo, up;
-            load(ref, lo, up);
+            load(sorted_[i], lo, up);
             box.extend(lo, up);
-            keys_[i] = recordIndex_ ? ref.index : index;
+            out_[i] = sorted_[i];
         }
         return format::makeLeafRef(r.begin, r.count());
     }
@@ -286,14 +257,6 @@ private:
         if (r.depth < format::kSahDepthLimit && first != last) {
             const int bit = 63 - __builtin_clzll(first ^ last);
             const uint64_t threshold = (last >> bit << bit) << indexBits_;  // common prefix, then the 1 bit
-            if (uint32_t(bit) >= topShift_) {
-                // The bit lies in the top digit and every bit below it is 0: the split is where the bucket of the
-                // threshold's top digit begins (no search through the largest ranges' uncached keys).
-                mid = bucketBegin_[uint32_t(last >> bit << bit >> topShift_)];
-                left = {r.begin, mid, r.depth + 1};
-                right = {mid, r.end, r.depth + 1};
-                return;
-            }
             // Branch-free lower bound: the comparisons are unpredictable, a conditional move is not.
             const uint64_t* base = keys_ + r.begin;
             for (uint32_t len = r.count(); len > 1;) {
@@ -307,99 +270,59 @@ private:
         right = {mid, r.end, r.depth + 1};
     }
 
-    uint64_t* keys_;
-    uint32_t n_;
+    const uint64_t* keys_;
     uint32_t indexBits_;
-    uint64_t indexMask_;
-    uint32_t topShift_;
-    const uint32_t* bucketBegin_;
-    const PrimRef* refs_;
-    bool recordIndex_;
+    const PrimRef* sorted_;
+    PrimRef* out_;
     Node* nodes_;
     uint32_t maxLeafSize_;
     uint32_t nodeCount_ = 0;
 };
 
-// The build over keys[0, 2n): afterwards keys[i] is the refs index (or with recordIndex the ref's `index` field) of
-// the primitive at position i of the leaves.
-BvhBuildResult buildOrder(const PrimRef* refs, uint32_t n, uint32_t maxLeafSize, Node* nodes, uint64_t* keys,
-                          bool recordIndex) {
+}  // namespace
+
+BvhBuildResult buildMortonBvh(PrimRef* refs, uint32_t n, uint32_t maxLeafSize, Node* nodes,
+                              const ParallelFor* /*parallel: serial for now*/) {
     BvhBuildResult result;
     if (n == 0) return result;
     InputBounds input;
     input.add(refs, 0, n);
     result.bounds = Box4{input.lower, input.upper}.aabb();
     if (n <= maxLeafSize) {
-        for (uint32_t i = 0; i < n; ++i) keys[i] = recordIndex ? refs[i].index : i;
         result.root = format::makeLeafRef(0, n);
         return result;
     }
 
     const KeyLayout layout(n);
     const Quantizer quant(input, layout.axisBits);
+    std::unique_ptr<uint64_t[]> keyBuffer(new uint64_t[2 * uint64_t(n)]);
+    uint64_t* keys = keyBuffer.get();
     uint64_t* other = keys + n;
-    uint32_t topCount[1u << kTopBits] = {};
-    makeKeys(refs, 0, n, quant, layout, keys, topCount);
+    std::vector<uint32_t> topCount(1u << kTopBits, 0);
+    makeKeys(refs, 0, n, quant, layout, keys, topCount.data());
 
     // Scatter by the top digit into `other` (stable), then sort each bucket back into `keys`; the bucket's span of
-    // `keys` is its scratch once the scatter is done.
-    uint32_t bucketBegin[(1u << kTopBits) + 1];
-    bucketBegin[0] = 0;
-    for (uint32_t d = 0; d < (1u << kTopBits); ++d) bucketBegin[d + 1] = bucketBegin[d] + topCount[d];
+    // `other` is its second buffer once its keys are counted.
+    std::vector<uint32_t> bucketBegin(topCount.size() + 1, 0);
+    for (size_t d = 0; d < topCount.size(); ++d) bucketBegin[d + 1] = bucketBegin[d] + topCount[d];
     {
-        uint32_t offset[1u << kTopBits];
-        std::memcpy(offset, bucketBegin, sizeof offset);
-        for (uint32_t i = 0; i < n; ++i) {
-            const uint64_t key = keys[i];
-            other[offset[layout.topDigit(key)]++] = key;
-        }
+        std::vector<uint32_t> offset(bucketBegin.begin(), bucketBegin.end() - 1);
+        for (uint32_t i = 0; i < n; ++i) other[offset[layout.topDigit(keys[i])]++] = keys[i];
     }
-    const uint32_t belowTop = layout.indexBits + layout.codeBits() - kTopBits;
-    for (uint32_t d = 0; d < (1u << kTopBits); ++d) {
+    for (size_t d = 0; d < topCount.size(); ++d) {
         const uint32_t b = bucketBegin[d], count = topCount[d];
-        if (count) sortRange(other + b, keys + b, keys + b, count, belowTop, layout.indexBits);
+        if (count) sortBucket(other + b, keys + b, other + b, count, layout);
     }
+    // The references in sorted order; the leaves copy them back into refs.
+    std::unique_ptr<PrimRef[]> sorted(new PrimRef[n]);
+    const uint64_t indexMask = layout.indexMask();
+    for (uint32_t i = 0; i < n; ++i) sorted[i] = refs[keys[i] & indexMask];
 
-    TreeWriter writer(keys, n, layout.indexBits, layout.codeBits() - kTopBits, bucketBegin, refs, recordIndex, nodes,
-                      maxLeafSize);
+    TreeWriter writer(keys, layout.indexBits, sorted.get(), refs, nodes, maxLeafSize);
     Box4 rootBox;
     result.root = writer.build(Range{0, n, 0}, rootBox);
     result.nodeCount = writer.nodeCount();
     return result;
-}
-
-}  // namespace
-
-BvhBuildResult buildMortonBvh(PrimRef* refs, uint32_t n, uint32_t maxLeafSize, Node* nodes,
-                              const ParallelFor* /*parallel: serial for now*/) {
-    if (n == 0) return BvhBuildResult{};
-    std::unique_ptr<uint64_t[]> keys(new uint64_t[2 * uint64_t(n)]);
-    BvhBuildResult result = buildOrder(refs, n, maxLeafSize, nodes, keys.get(), false);
-    // Permute refs into leaf order in place, cycle by cycle (bit 63 marks the positions done): refs[i] becomes the
-    // reference that was at keys[i].
-    constexpr uint64_t kDone = uint64_t(1) << 63;
-    uint64_t* order = keys.get();
-    for (uint32_t i = 0; i < n; ++i) {
-        if (order[i] & kDone) continue;
-        const PrimRef first = refs[i];
-        uint32_t j = i;
-        for (;;) {
-            const uint32_t from = uint32_t(order[j]);
-            order[j] |= kDone;
-            if (from == i) {
-                refs[j] = first;
-                break;
-            }
-            refs[j] = refs[from];
-            j = from;
-        }
-    }
-    return result;
-}
-
-BvhBuildResult buildMortonBvhOrder(const PrimRef* refs, uint32_t n, uint32_t maxLeafSize, Node* nodes,
-                                   uint64_t* work) {
-    return buildOrder(refs, n, maxLeafSize, nodes, work, true);
 }
 
 }  // namespace vkas

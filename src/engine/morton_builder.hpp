@@ -16,10 +16,4 @@ namespace vkas {
 BvhBuildResult buildMortonBvh(PrimRef* refs, uint32_t n, uint32_t maxLeafSize, format::Node* nodes,
                               const ParallelFor* parallel = nullptr);
 
-// buildMortonBvh for a caller that reorders its own records: refs stay as they are; work holds 2n keys (any
-// memory, not touched after the call returns but for work[0, n)). Afterwards work[i] is refs[j].index of the
-// primitive j at position i of the leaves (a leaf is a range of these positions). Same tree as buildMortonBvh.
-BvhBuildResult buildMortonBvhOrder(const PrimRef* refs, uint32_t n, uint32_t maxLeafSize, format::Node* nodes,
-                                   uint64_t* work);
-
 }  // namespace vkas
