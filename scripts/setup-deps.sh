@@ -4,7 +4,7 @@
 set -euo pipefail
 
 # clang + libclang-rt-14-dev (libFuzzer, the sanitizer runtimes): the sanitizer build and its fuzz targets.
-packages=(build-essential cmake pkg-config libvulkan-dev libgtest-dev libgmock-dev libcli11-dev libpng-dev
+packages=(build-essential cmake pkg-config libvulkan-dev libxxhash-dev libgtest-dev libgmock-dev libcli11-dev libpng-dev
           glslang-tools clang libclang-rt-14-dev "$@")
 
 missing=()

@@ -39,19 +39,24 @@ uint64_t blobExtent(const void* src) {
                               load64(static_cast<const std::byte*>(src) + serial::kSerializedSizeOffset));
 }
 
-struct MapContext {
+// Serialization's side of the handle array: a stored instance reference (a VkAccelerationStructureKHR handle) to
+// the device address of its structure, looked up in the device's registry (a destroyed structure gives 0, never a
+// dereference); consecutive instances mostly share a bottom level, so the last answer is kept.
+struct AddressOfReference {
     const Device* device;
-    std::unordered_map<uint64_t, uint64_t> cache;
+    uint64_t lastReference = 0, lastAddress = 0;
+    static uint64_t map(const void* context, uint64_t reference) {
+        auto* self = static_cast<AddressOfReference*>(const_cast<void*>(context));
+        if (reference != self->lastReference) {
+            const auto* as =
+                self->device->live<AccelerationStructure>(reinterpret_cast<const void*>(reference),
+                                                          ObjectMagic::AccelerationStructure);
+            self->lastReference = reference;
+            self->lastAddress = as ? reinterpret_cast<uintptr_t>(as->block()) : 0;
+        }
+        return self->lastAddress;
+    }
 };
-
-uint64_t mapCached(const void* context, uint64_t value) {
-    auto* ctx = static_cast<MapContext*>(const_cast<void*>(context));
-    auto it = ctx->cache.find(value);
-    if (it != ctx->cache.end()) return it->second;
-    const uint64_t mapped = mapSerializedReference(*ctx->device, value);
-    ctx->cache.emplace(value, mapped);
-    return mapped;
-}
 
 }  // namespace
 
@@ -64,11 +69,22 @@ const std::byte* constructedBlock(const AccelerationStructure& as) {
     return block;
 }
 
-uint64_t mapSerializedReference(const Device& device, uint64_t value) {
+uint64_t SerializedReferences::toReference(uint64_t value) {
     if (value == 0) return 0;
-    if (device.live<AccelerationStructure>(reinterpret_cast<const void*>(value), ObjectMagic::AccelerationStructure))
-        return value;
-    if (const AccelerationStructure* as = device.structureAtAddress(value)) return reinterpret_cast<uint64_t>(as);
+    if (!indexed_) {
+        byAddress_ = device_.bottomLevelsByAddress();
+        indexed_ = true;
+    }
+    // Spec (vkCopyMemoryToAccelerationStructureKHR): the data must have "any acceleration structure handles filled
+    // in with the newly-queried handles to bottom level acceleration structures created before deserialization.
+    // These do not need to be built at deserialize time, but must be created." The loaded instance stores the
+    // structure's handle, so it traces whatever that structure holds once it is built.
+    if (auto it = byAddress_.find(value); it != byAddress_.end()) return reinterpret_cast<uint64_t>(it->second);
+    if (layout_ == serial::Layout::V1) {
+        const auto* as = device_.live<AccelerationStructure>(reinterpret_cast<const void*>(value),
+                                                            ObjectMagic::AccelerationStructure);
+        if (as && as->type != VK_ACCELERATION_STRUCTURE_TYPE_TOP_LEVEL_KHR) return value;
+    }
     return 0;
 }
 
@@ -85,31 +101,41 @@ VkResult copyAccelerationStructure(const AccelerationStructure& src, Acceleratio
 
 VkResult serializeAccelerationStructure(const AccelerationStructure& src, void* dst) {
     const std::byte* block = constructedBlock(src);
-    if (!block || !dst) return VK_ERROR_UNKNOWN;
+    if (!block || !dst || !src.device) return VK_ERROR_UNKNOWN;
     if (rangesOverlap(reinterpret_cast<uintptr_t>(dst), serial::serializedSize(block),
                       reinterpret_cast<uintptr_t>(block), serial::compactedSize(block)))
         return VK_ERROR_UNKNOWN;
-    serial::serializeBlock(block, static_cast<std::byte*>(dst));
+    AddressOfReference addresses{src.device};
+    serial::serializeBlock(block, static_cast<std::byte*>(dst), &AddressOfReference::map, &addresses);
     return VK_SUCCESS;
 }
 
 VkResult deserializeAccelerationStructure(const Device& device, const void* src, AccelerationStructure& dst) {
-    if (!src) return VK_ERROR_UNKNOWN;
+    // Whatever fails below, dst ends holding no structure: what it held before may be partly overwritten.
+    const auto fail = [&dst](VkResult result) {
+        markUnconstructed(dst);
+        return result;
+    };
+    if (!src) return fail(VK_ERROR_UNKNOWN);
     serial::SerializedView view;
-    const format::CheckResult check =
-        format::checkSerialized(static_cast<const std::byte*>(src), blobExtent(src), &view);
-    if (check.status == format::CheckStatus::Incompatible) return VK_ERROR_INCOMPATIBLE_VERSION_KHR;
-    if (!check.ok()) return VK_ERROR_UNKNOWN;
+    const format::CheckResult layout =
+        format::checkSerializedLayout(static_cast<const std::byte*>(src), blobExtent(src), &view);
+    if (layout.status == format::CheckStatus::Incompatible) return fail(VK_ERROR_INCOMPATIBLE_VERSION_KHR);
+    if (!layout.ok()) return fail(VK_ERROR_UNKNOWN);
     std::byte* to = dst.block();
-    if (!to || dst.size < view.deserializedSize) return VK_ERROR_UNKNOWN;
+    if (!to || dst.size < view.deserializedSize) return fail(VK_ERROR_UNKNOWN);
     if (rangesOverlap(reinterpret_cast<uintptr_t>(src), view.serializedSize, reinterpret_cast<uintptr_t>(to),
                       view.deserializedSize))
-        return VK_ERROR_UNKNOWN;
-    MapContext context{&device, {}};
+        return fail(VK_ERROR_UNKNOWN);
+    // Copy and hash in one pass, then check the copy: the bytes checked are the bytes that will be traced.
+    const uint64_t hash = serial::loadBlock(view, to);
+    if (view.layout == serial::Layout::V2 && hash != view.storedHash) return fail(VK_ERROR_UNKNOWN);
+    if (!format::checkLoadedBlock(view, to).ok()) return fail(VK_ERROR_UNKNOWN);
+    SerializedReferences references(device, view.layout);
     try {
-        serial::deserializeBlock(view, to, &mapCached, &context);
+        if (!serial::bindReferences(view, to, &SerializedReferences::map, &references)) return fail(VK_ERROR_UNKNOWN);
     } catch (...) {
-        markUnconstructed(dst);  // out of memory part-way (the handle cache): dst holds no structure
+        markUnconstructed(dst);  // out of memory (the address index): dst holds no structure
         throw;
     }
     dst.constructed = true;
@@ -300,12 +326,17 @@ VKAPI_ATTR VkResult VKAPI_CALL CopyMemoryToAccelerationStructureKHR(
                     v.check(dst->size >= view.deserializedSize, "VUID-VkCopyMemoryToAccelerationStructureInfoKHR-dst-03746",
                             "pInfo->dst has size %llu but the serialized data's deserialized size is %llu.",
                             (ull)dst->size, (ull)view.deserializedSize);
+                SerializedReferences references(*dev, view.layout);
                 for (uint64_t k = 0; k < view.handleCount; ++k) {
                     const uint64_t value = load64(view.handles + 8 * k);
-                    if (!v.check(value == 0 || mapSerializedReference(*dev, value) != 0,
+                    if (!v.check(value == 0 || references.toReference(value) != 0,
                                  "VUID-VkCopyMemoryToAccelerationStructureInfoKHR-src-04960",
-                                 "entry %llu of the handle array, 0x%llx, is neither a live VkAccelerationStructureKHR "
-                                 "nor the device address of one.",
+                                 view.layout == serial::Layout::V1
+                                     ? "entry %llu of the handle array, 0x%llx, is neither the device address of a "
+                                       "bottom-level acceleration structure of this device nor the handle of one."
+                                     : "entry %llu of the handle array, 0x%llx, is not the device address "
+                                       "(vkGetAccelerationStructureDeviceAddressKHR) of a bottom-level acceleration "
+                                       "structure of this device.",
                                  (ull)k, (ull)value))
                         break;
                 }

@@ -8,9 +8,11 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <unordered_map>
 
 #include "api/device.hpp"
 #include "api/objects.hpp"
+#include "engine/serialize.hpp"
 
 namespace vkas {
 
@@ -21,18 +23,35 @@ const std::byte* constructedBlock(const AccelerationStructure& as);
 // vkCopyAccelerationStructureKHR: CLONE and COMPACT both copy [0, usedSize) (the compacted size).
 VkResult copyAccelerationStructure(const AccelerationStructure& src, AccelerationStructure& dst);
 
-// vkCopyAccelerationStructureToMemoryKHR (SERIALIZE): writes the serialized form at `dst`.
+// vkCopyAccelerationStructureToMemoryKHR (SERIALIZE): writes the serialized form at `dst`, each bottom level as
+// its device address (0 for an instance whose structure no longer exists or has no memory).
 VkResult serializeAccelerationStructure(const AccelerationStructure& src, void* dst);
 
-// vkCopyMemoryToAccelerationStructureKHR (DESERIALIZE): checks the blob at `src` and loads it into `dst`, mapping
-// each handle-array entry (a VkAccelerationStructureKHR of `device`, or the device address of one) to its handle.
-// VK_ERROR_INCOMPATIBLE_VERSION_KHR for UUIDs vkas does not load, VK_ERROR_UNKNOWN for malformed data or a `dst`
-// too small.
-VkResult deserializeAccelerationStructure(const Device& device, const void* src, AccelerationStructure& dst);
+// Maps handle-array entries of serialized data to the bottom levels of `device` they name: in layout 2 a device
+// address (vkGetAccelerationStructureDeviceAddressKHR) of a live structure created as BOTTOM_LEVEL or GENERIC; in
+// layout 1 (older vkas wrote handle values there) such an address or else such a VkAccelerationStructureKHR.
+class SerializedReferences {
+public:
+    SerializedReferences(const Device& device, serial::Layout layout) : device_(device), layout_(layout) {}
+    // The instance reference (a VkAccelerationStructureKHR handle) a loaded top level stores for `value`, or 0
+    // when it names no such structure. Allocates (the address index, built on first use): may throw bad_alloc.
+    uint64_t toReference(uint64_t value);
+    static uint64_t map(const void* context, uint64_t value) {
+        return static_cast<SerializedReferences*>(const_cast<void*>(context))->toReference(value);
+    }
 
-// The handle-array entry `value` as the reference a loaded top level stores: itself when it is a live structure of
-// `device`, the structure at that device address, or 0 when it names none.
-uint64_t mapSerializedReference(const Device& device, uint64_t value);
+private:
+    const Device& device_;
+    serial::Layout layout_;
+    bool indexed_ = false;
+    std::unordered_map<uint64_t, const AccelerationStructure*> byAddress_;
+};
+
+// vkCopyMemoryToAccelerationStructureKHR (DESERIALIZE): checks the blob at `src` and loads it into `dst`, mapping
+// each handle-array entry through SerializedReferences. VK_ERROR_INCOMPATIBLE_VERSION_KHR for UUIDs vkas does not
+// load, VK_ERROR_UNKNOWN for malformed or altered data (integrity hash), a `dst` too small or an entry naming no
+// bottom level; on any failure `dst` is left unconstructed.
+VkResult deserializeAccelerationStructure(const Device& device, const void* src, AccelerationStructure& dst);
 
 // vkWriteAccelerationStructuresPropertiesKHR: one u64 per structure at pData + i * stride, only where it fits in
 // dataSize. A structure vkas has not constructed gives 0.

@@ -94,16 +94,18 @@ bool Device::isLive(const void* object) const {
     return objects_.count(object) != 0;
 }
 
-AccelerationStructure* Device::structureAtAddress(uint64_t address) const {
-    if (address == 0) return nullptr;
+std::unordered_map<uint64_t, const AccelerationStructure*> Device::bottomLevelsByAddress() const {
+    std::unordered_map<uint64_t, const AccelerationStructure*> byAddress;
     std::lock_guard lock(mutex_);
     for (const void* o : objects_) {
-        auto* p = static_cast<AccelerationStructure*>(const_cast<void*>(o));
-        if (*static_cast<const ObjectMagic*>(o) == ObjectMagic::AccelerationStructure &&
-            reinterpret_cast<uintptr_t>(p->block()) == address)
-            return p;
+        if (*static_cast<const ObjectMagic*>(o) != ObjectMagic::AccelerationStructure) continue;
+        const auto* as = static_cast<const AccelerationStructure*>(o);
+        const uint64_t address = reinterpret_cast<uintptr_t>(as->block());
+        if (address == 0 || as->type == VK_ACCELERATION_STRUCTURE_TYPE_TOP_LEVEL_KHR) continue;
+        auto [it, inserted] = byAddress.emplace(address, as);
+        if (!inserted && as->type == VK_ACCELERATION_STRUCTURE_TYPE_BOTTOM_LEVEL_KHR) it->second = as;
     }
-    return nullptr;
+    return byAddress;
 }
 
 size_t Device::releaseAll() {

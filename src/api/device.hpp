@@ -5,6 +5,7 @@
 
 #include <memory>
 #include <mutex>
+#include <unordered_map>
 #include <unordered_set>
 
 #include "api/objects.hpp"
@@ -37,9 +38,11 @@ public:
     // vkasDestroyDevice) and returns how many there were.
     size_t releaseAll();
 
-    // The live acceleration structure whose device address (the host address of its block) is `address`, or
-    // nullptr (deserialization maps handle-array entries given as addresses to handles).
-    AccelerationStructure* structureAtAddress(uint64_t address) const;
+    // The live acceleration structures of this device that can be a top level's bottom levels (created as
+    // BOTTOM_LEVEL or GENERIC, bound to memory), by device address (the host address of their block), for
+    // deserialization to map handle-array entries to them. Where several alias one address, a BOTTOM_LEVEL one is
+    // preferred (they share their bytes, so any of them traces alike).
+    std::unordered_map<uint64_t, const AccelerationStructure*> bottomLevelsByAddress() const;
 
     template <class T>
     T* live(const void* handle, ObjectMagic magic) const {

@@ -143,12 +143,14 @@ CheckResult checkBlock(const std::byte* block, uint64_t size) {
     return {};
 }
 
-CheckResult checkSerialized(const std::byte* data, uint64_t size, serial::SerializedView* view) {
+CheckResult checkSerializedLayout(const std::byte* data, uint64_t size, serial::SerializedView* view) {
     using namespace serial;
     if (!data || size < kHeaderSize) return corrupt("the blob is shorter than the serialized header");
-    if (!compatibleVersion(reinterpret_cast<const uint8_t*>(data)))
-        return {CheckStatus::Incompatible, "the driver or compatibility UUID is not one vkas loads"};
     SerializedView v;
+    v.layout = layoutOf(reinterpret_cast<const uint8_t*>(data));
+    if (v.layout == Layout::None)
+        return {CheckStatus::Incompatible, "the driver or compatibility UUID is not one vkas loads"};
+    v.data = data;
     v.serializedSize = load64(data + kSerializedSizeOffset);
     v.deserializedSize = load64(data + kDeserializedSizeOffset);
     const uint64_t count = load64(data + kHandleCountOffset);
@@ -157,19 +159,45 @@ CheckResult checkSerialized(const std::byte* data, uint64_t size, serial::Serial
     const bool blockForm = (count >> 32) == 0xFFFF'FFFFull;
     if (blockForm && (count & 0xFFFF'FFFFull) != 0) return corrupt("the blob has opacity-micromap blocks");
     v.handleCount = blockForm ? 0 : count;
+    const uint64_t prefix = opaquePrefixSize(v.layout);
     if (v.handleCount > (v.serializedSize - kHeaderSize) / 8) return corrupt("the handle count is out of range");
-    v.handles = data + kHandlesOffset;
-    v.block = v.handles + 8 * v.handleCount;
-    if (v.serializedSize - kHeaderSize - 8 * v.handleCount != v.deserializedSize)
+    if (v.serializedSize - kHeaderSize - 8 * v.handleCount < prefix)
+        return corrupt("the serialized size leaves no room for the integrity hash");
+    // The sizes must agree with each other before anything past the header is read: the header's serialized size
+    // is the extent the application vouches for, so a changed size field must be caught from the header alone.
+    if (v.serializedSize - kHeaderSize - 8 * v.handleCount - prefix != v.deserializedSize)
         return corrupt("the serialized size does not match the deserialized size and handle count");
-    const CheckResult r = checkBlock(v.block, v.deserializedSize);
+    if (v.deserializedSize < sizeof(Header)) return corrupt("the deserialized size is shorter than a block header");
+    v.handles = data + kHandlesOffset;
+    if (v.layout == Layout::V2) v.storedHash = load64(v.handles + 8 * v.handleCount);
+    v.block = v.handles + 8 * v.handleCount + prefix;
+    if (view) *view = v;
+    return {};
+}
+
+CheckResult checkLoadedBlock(const serial::SerializedView& view, const std::byte* block) {
+    const CheckResult r = checkBlock(block, view.deserializedSize);
     if (!r.ok()) return r;
     Header h;
-    std::memcpy(&h, v.block, sizeof h);
-    if (h.usedSize != v.deserializedSize) return corrupt("the deserialized size is not the block's usedSize");
+    std::memcpy(&h, block, sizeof h);
+    if (h.usedSize != view.deserializedSize) return corrupt("the deserialized size is not the block's usedSize");
     const bool topLevel = h.type == uint32_t(StructureType::TopLevel);
-    if (topLevel ? (blockForm || v.handleCount != h.primitiveCount) : v.handleCount != 0)
+    const bool blockForm = (load64(view.data + serial::kHandleCountOffset) >> 32) == 0xFFFF'FFFFull;
+    if (topLevel ? (blockForm || view.handleCount != h.primitiveCount) : view.handleCount != 0)
         return corrupt("the handle count does not match the structure");
+    return {};
+}
+
+CheckResult checkSerialized(const std::byte* data, uint64_t size, serial::SerializedView* view) {
+    serial::SerializedView v;
+    const CheckResult layout = checkSerializedLayout(data, size, &v);
+    if (!layout.ok()) return layout;
+    // Serialized layout 2: any change of a hashed byte (everything but the handle array) is caught here, before the
+    // block is read for its structure.
+    if (v.layout == serial::Layout::V2 && serial::integrityHash(v) != v.storedHash)
+        return corrupt("the integrity hash does not match the data (the blob was changed or truncated)");
+    const CheckResult block = checkLoadedBlock(v, v.block);
+    if (!block.ok()) return block;
     if (view) *view = v;
     return {};
 }

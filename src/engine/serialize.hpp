@@ -1,7 +1,8 @@
 // Copies, compaction and serialization of acceleration structures on plain memory (docs/FORMAT.md, "Serialized
 // form"). The format holds relative offsets only, so a clone or a compacted copy is a byte copy of [0, usedSize).
 // The serialized form is the spec's header (driverUUID, compatibility UUID, serialized size, deserialized size,
-// handle count N, N bottom-level references) followed by the block itself.
+// handle count N, N bottom-level device addresses) followed by the opaque part: in serialized layout 2 an XXH3-64
+// integrity hash and the block itself (layout 1, still loaded, had no hash).
 #pragma once
 
 #include <cstddef>
@@ -18,15 +19,34 @@ constexpr size_t kCompatibilityUuidOffset = 16;
 constexpr size_t kSerializedSizeOffset = 32;
 constexpr size_t kDeserializedSizeOffset = 40;
 constexpr size_t kHandleCountOffset = 48;
-constexpr size_t kHandlesOffset = 56;  // N u64 references follow, then the block
+constexpr size_t kHandlesOffset = 56;  // N u64 device addresses follow, then the opaque part
 constexpr size_t kHeaderSize = 56;
+constexpr size_t kIntegrityHashSize = 8;  // layout 2: the u64 hash right after the handle array
 
-// The UUIDs of format version 1: fixed ASCII strings (no terminator). A later vkas keeps accepting them (it may
-// write new ones for a new format version, and then accepts both).
+// The layouts of the serialized form. The driverUUID names the layout (the envelope around the block), the
+// compatibility UUID the block's format version; both are fixed ASCII strings (no terminator). A later vkas keeps
+// loading every pair it ever wrote.
+enum class Layout : uint32_t {
+    None = 0,  // not a pair this build loads
+    V1 = 1,    // header, handle array (handle values), block
+    V2 = 2,    // header, handle array (device addresses), integrity hash, block
+};
+inline constexpr Layout kWrittenLayout = Layout::V2;
 inline constexpr uint8_t kDriverUuidV1[kUuidSize] = {'V', 'K', 'A', 'S', '-', 'D', 'R', 'I',
                                                      'V', 'E', 'R', '-', 'F', 'M', 'T', '1'};
+inline constexpr uint8_t kDriverUuidV2[kUuidSize] = {'V', 'K', 'A', 'S', '-', 'S', 'E', 'R',
+                                                     'I', 'A', 'L', 'I', 'Z', 'E', 'D', '2'};
+// Block format version 1 (format::kVersion), in both layouts.
 inline constexpr uint8_t kCompatibilityUuidV1[kUuidSize] = {'V', 'K', 'A', 'S', '-', 'A', 'S', '-',
                                                             'F', 'O', 'R', 'M', 'A', 'T', '-', '1'};
+
+// The layout the first 2 * VK_UUID_SIZE bytes of a serialized header (driverUUID, compatibility UUID) name, or
+// Layout::None for a pair this build does not load.
+Layout layoutOf(const uint8_t* versionData);
+// vkGetDeviceAccelerationStructureCompatibilityKHR: whether this build loads data with that UUID pair.
+inline bool compatibleVersion(const uint8_t* versionData) { return layoutOf(versionData) != Layout::None; }
+// Bytes between the handle array and the block.
+constexpr uint64_t opaquePrefixSize(Layout layout) { return layout == Layout::V2 ? kIntegrityHashSize : 0; }
 
 // Bytes per record of a block with these header fields (format.hpp): instance records for a top level (motion:
 // 256), 96 for a motion bottom level of triangles, 48 for every other bottom level.
@@ -42,37 +62,47 @@ constexpr size_t kInstanceReferenceOffset = offsetof(format::InstanceRecord, ref
 constexpr size_t kInstanceIdOffset = offsetof(format::InstanceRecord, instanceId);
 constexpr size_t kInstanceMotionTypeOffset = offsetof(format::InstanceRecord, motionType);
 
-// Whether the first 2 * VK_UUID_SIZE bytes of a serialized header (driverUUID, compatibility UUID) name data this
-// build of vkas can load (vkGetDeviceAccelerationStructureCompatibilityKHR).
-bool compatibleVersion(const uint8_t* versionData);
-
 // Query values of a well-formed block (a structure built or loaded by vkas).
-uint64_t compactedSize(const std::byte* block);     // usedSize
-uint64_t handleCount(const std::byte* block);       // top level: instances given to the build; bottom level: 0
-uint64_t serializedSize(const std::byte* block);    // kHeaderSize + 8 * handleCount + usedSize
+uint64_t compactedSize(const std::byte* block);   // usedSize
+uint64_t handleCount(const std::byte* block);     // top level: instances given to the build; bottom level: 0
+uint64_t serializedSize(const std::byte* block);  // kHeaderSize + 8 * handleCount + kIntegrityHashSize + usedSize
 
 // Clone / compact: copies [0, usedSize) of `src` to `dst` (which must hold compactedSize(src) bytes).
 void copyBlock(const std::byte* src, std::byte* dst);
 
-// Writes serializedSize(block) bytes at `out` (any alignment). Handle slot k holds the reference of the instance
-// whose instanceId is k (0 for an inactive instance); the block's own instance references are written as 0.
-void serializeBlock(const std::byte* block, std::byte* out);
+// Maps one value to another through the application's objects (the API layer knows them, the engine does not):
+// a stored instance reference to the handle-array value when serializing, and back when loading. 0: none.
+using ReferenceMapper = uint64_t (*)(const void* context, uint64_t value);
 
-// Where the parts of a serialized blob lie; filled by format::checkSerialized.
+// Writes serializedSize(block) bytes at `out` (any alignment) in layout 2. Handle slot k holds
+// toAddress(reference) of the instance whose instanceId is k (0 for an inactive instance); the block's own instance
+// references are written as 0, so the hashed bytes depend only on the build inputs.
+void serializeBlock(const std::byte* block, std::byte* out, ReferenceMapper toAddress, const void* context);
+
+// Where the parts of a serialized blob lie; filled by format::checkSerializedLayout.
 struct SerializedView {
+    Layout layout = Layout::None;
     uint64_t serializedSize = 0;
     uint64_t deserializedSize = 0;  // == the block's usedSize
     uint64_t handleCount = 0;
+    const std::byte* data = nullptr;     // the blob: its first kHeaderSize bytes are hashed (layout 2)
     const std::byte* handles = nullptr;  // handleCount u64 (unaligned)
+    uint64_t storedHash = 0;             // layout 2: the integrity hash the blob carries
     const std::byte* block = nullptr;    // deserializedSize bytes (unaligned)
 };
 
-// Maps a value of the handle array to the instance reference the loaded structure stores (0: inactive).
-using ReferenceMapper = uint64_t (*)(const void* context, uint64_t value);
+// The integrity hash of the blob `view` describes, computed afresh (compare with view.storedHash).
+uint64_t integrityHash(const SerializedView& view);
+// Rewrites the integrity hash of a layout-2 blob after its bytes were changed on purpose (tests, fuzzers).
+void sealIntegrityHash(const SerializedView& view, std::byte* data);
 
-// Loads a blob that format::checkSerialized accepted into `dst` (aligned like a structure's block, at least
-// view.deserializedSize bytes): copies the block and sets each instance's reference to
-// map(handles[instanceId]).
-void deserializeBlock(const SerializedView& view, std::byte* dst, ReferenceMapper map, const void* context);
+// Copies the block of a blob whose layout checked out into `dst` (aligned like a structure's block, at least
+// view.deserializedSize bytes), hashing it on the way. Returns the integrity hash of the blob as copied (layout 2;
+// 0 for layout 1): the caller compares it with view.storedHash before it trusts `dst`.
+uint64_t loadBlock(const SerializedView& view, std::byte* dst);
+
+// Sets each instance reference of the loaded top level at `dst` to toReference(handles[instanceId]); an entry of 0
+// makes its instance inactive. Returns false, leaving some references unset, when a non-zero entry maps to 0.
+bool bindReferences(const SerializedView& view, std::byte* dst, ReferenceMapper toReference, const void* context);
 
 }  // namespace vkas::serial
