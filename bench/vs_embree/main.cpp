@@ -259,8 +259,11 @@ void Bench::runScene(const Scene& sc) {
         });
         const Agreement g = compareHits(rays[k], vkBatch1[k], em1Hits, anyHit, anyHit ? &emClosest : nullptr, differing, verdicts);
         const size_t rqDiff = countDifferent(vkBatch1[k], rqHits), nDiff = countDifferent(vkBatch1[k], batchN);
-        for (size_t d = 0; d < differing.size() && d < showLimit; ++d)
-            std::printf("    %s\n", disagreementText(kind, differing[d], rays[k][differing[d]], verdicts[d], anyHit).c_str());
+        for (size_t d = 0; d < differing.size() && d < showLimit; ++d) {
+            const size_t i = differing[d];
+            const Category c = classify(rays[k][i], vkBatch1[k][i], em1Hits[i], anyHit, anyHit ? emClosest[i] : Hit{});
+            std::printf("    %s\n", disagreementText(kind, i, rays[k][i], c, verdicts[d], anyHit).c_str());
+        }
         agreementText[k] = std::string(kind) + " vs " + e1 + ": " + describe(g, anyHit) +
                            "; vkas ray query vs batch: " + std::to_string(rqDiff) + " differ, batch " +
                            std::to_string(o_.threads) + " threads vs 1: " + std::to_string(nDiff) + " differ";

@@ -28,6 +28,40 @@ std::vector<size_t> differingRays(const std::vector<VkasRay>& rays, const std::v
     return out;
 }
 
+Category classify(const VkasRay& ray, const Hit& x, const Hit& y, bool anyHit, const Hit& refClosest) {
+    if (x.hit() != y.hit()) {
+        // Classify with whichever closest hit we have: the one that hit (closest-hit rays) or the reference's.
+        const Hit& h = anyHit ? refClosest : (x.hit() ? x : y);
+        if (h.hit()) {
+            const float w = 1 - h.u - h.v;
+            if (std::min({h.u, h.v, w}) < 1e-3f) return Category::HitMissAtEdge;
+            if (std::isfinite(ray.tMax) && std::abs(h.t - ray.tMax) <= 1e-4f * ray.tMax) return Category::HitMissAtEnd;
+        }
+        return Category::HitMiss;
+    }
+    if (!x.hit() || anyHit) return Category::Same;
+    const double dt = std::abs(double(x.t) - y.t);
+    const double tol = tTolerance(ray, x, y);
+    if (x.prim == y.prim && x.inst == y.inst) return dt > tol ? Category::SameBeyondT : Category::Same;
+    if (dt <= tol) return Category::Tie;
+    const Hit& nearer = x.t < y.t ? x : y;
+    return std::min({nearer.u, nearer.v, 1 - nearer.u - nearer.v}) < 1e-3f ? Category::OtherPastEdge : Category::Other;
+}
+
+const char* categoryName(Category c) {
+    switch (c) {
+        case Category::Same: return "same result";
+        case Category::SameBeyondT: return "same primitive, t beyond the tolerance";
+        case Category::Tie: return "tie: other primitive, same t";
+        case Category::OtherPastEdge: return "other hit, past an edge";
+        case Category::Other: return "other hit";
+        case Category::HitMissAtEdge: return "hit/miss at an edge";
+        case Category::HitMissAtEnd: return "hit/miss at tMax";
+        case Category::HitMiss: return "hit/miss";
+    }
+    return "?";
+}
+
 Agreement compareHits(const std::vector<VkasRay>& rays, const std::vector<Hit>& a, const std::vector<Hit>& b, bool anyHit,
                       const std::vector<Hit>* refClosest, const std::vector<size_t>& differing,
                       const std::vector<Judgement>& verdicts) {
@@ -35,35 +69,19 @@ Agreement compareHits(const std::vector<VkasRay>& rays, const std::vector<Hit>& 
     g.rays = rays.size();
     for (size_t i = 0; i < rays.size(); ++i) {
         const Hit &x = a[i], &y = b[i];
-        if (x.hit() != y.hit()) {
-            ++g.hitMiss;
-            // Classify with whichever closest hit we have: the one that hit (closest-hit rays) or the reference's.
-            const Hit& h = anyHit ? (refClosest ? (*refClosest)[i] : Hit{}) : (x.hit() ? x : y);
-            if (h.hit()) {
-                const float w = 1 - h.u - h.v;
-                if (std::min({h.u, h.v, w}) < 1e-3f) ++g.hitMissAtEdge;
-                else if (std::isfinite(rays[i].tMax) && std::abs(h.t - rays[i].tMax) <= 1e-4f * rays[i].tMax)
-                    ++g.hitMissAtEnd;
-            }
-            continue;
-        }
-        if (!x.hit() || anyHit) {
-            ++g.samePrimitive;
-            continue;
-        }
-        const double dt = std::abs(double(x.t) - y.t), t = std::max(std::abs(double(x.t)), std::abs(double(y.t)));
-        const double tol = tTolerance(rays[i], x, y);
-        if (x.prim == y.prim && x.inst == y.inst) {
-            ++g.samePrimitive;
-            g.sameBeyondT += dt > tol;
+        const Category c = classify(rays[i], x, y, anyHit, refClosest ? (*refClosest)[i] : Hit{});
+        g.hitMiss += c == Category::HitMiss || c == Category::HitMissAtEdge || c == Category::HitMissAtEnd;
+        g.hitMissAtEdge += c == Category::HitMissAtEdge;
+        g.hitMissAtEnd += c == Category::HitMissAtEnd;
+        g.samePrimitive += c == Category::Same || c == Category::SameBeyondT;
+        g.sameBeyondT += c == Category::SameBeyondT;
+        g.tie += c == Category::Tie;
+        g.differentHitAtEdge += c == Category::OtherPastEdge;
+        g.differentHit += c == Category::Other;
+        if (x.hit() && y.hit() && !anyHit && x.prim == y.prim && x.inst == y.inst) {
+            const double dt = std::abs(double(x.t) - y.t), t = std::max(std::abs(double(x.t)), std::abs(double(y.t)));
             g.maxRelT = std::max(g.maxRelT, dt / std::max(t, 1e-30));
-            g.maxTolT = std::max(g.maxTolT, dt / tol);
-        } else if (dt <= tol) {
-            ++g.tie;
-        } else {
-            const Hit& nearer = x.t < y.t ? x : y;
-            if (std::min({nearer.u, nearer.v, 1 - nearer.u - nearer.v}) < 1e-3f) ++g.differentHitAtEdge;
-            else ++g.differentHit;
+            g.maxTolT = std::max(g.maxTolT, dt / tTolerance(rays[i], x, y));
         }
     }
     g.differing = differing.size();
@@ -125,11 +143,12 @@ const char* verdictName(Verdict v) {
     return "?";
 }
 
-std::string disagreementText(const char* kind, size_t index, const VkasRay& r, const Judgement& j, bool anyHit) {
-    char buf[600];
-    std::snprintf(buf, sizeof buf, "%s ray %zu: origin (%a, %a, %a) direction (%a, %a, %a) t [%a, %a] = origin (%.9g, "
+std::string disagreementText(const char* kind, size_t index, const VkasRay& r, Category c, const Judgement& j,
+                             bool anyHit) {
+    char buf[700];
+    std::snprintf(buf, sizeof buf, "%s ray %zu (%s): origin (%a, %a, %a) direction (%a, %a, %a) t [%a, %a] = origin (%.9g, "
                   "%.9g, %.9g) direction (%.9g, %.9g, %.9g) t [%.9g, %.9g]",
-                  kind, index, r.origin[0], r.origin[1], r.origin[2], r.direction[0], r.direction[1], r.direction[2],
+                  kind, index, categoryName(c), r.origin[0], r.origin[1], r.origin[2], r.direction[0], r.direction[1], r.direction[2],
                   r.tMin, r.tMax, r.origin[0], r.origin[1], r.origin[2], r.direction[0], r.direction[1], r.direction[2],
                   r.tMin, r.tMax);
     const std::string pad = "\n      ";

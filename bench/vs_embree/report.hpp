@@ -29,6 +29,10 @@ struct Agreement {
     double maxVkasError = 0, maxEmbreeError = 0;
     size_t disagreements() const { return neither; }  // not explained by the oracle
 };
+// The class of one ray's pair of results (see above); `refClosest`: any-hit rays, the reference's closest hit.
+enum class Category { Same, SameBeyondT, Tie, OtherPastEdge, Other, HitMissAtEdge, HitMissAtEnd, HitMiss };
+Category classify(const VkasRay& ray, const Hit& a, const Hit& b, bool anyHit, const Hit& refClosest);
+const char* categoryName(Category c);
 // The rays whose results differ: hit against miss; closest hits: another primitive or instance, or the same one
 // with t beyond the tolerance above.
 std::vector<size_t> differingRays(const std::vector<VkasRay>& rays, const std::vector<Hit>& a, const std::vector<Hit>& b,
@@ -42,8 +46,9 @@ size_t countDifferent(const std::vector<Hit>& a, const std::vector<Hit>& b);
 std::string describe(const Agreement& g, bool anyHit);
 const char* verdictName(Verdict v);
 // One disagreeing ray, several lines: the ray (hex floats), vkas's and Embree's results as the oracle sees them, the
-// oracle's candidates and its verdict. `kind` starts the first line; `indent` starts the others.
-std::string disagreementText(const char* kind, size_t index, const VkasRay& ray, const Judgement& j, bool anyHit);
+// oracle's candidates and its verdict.
+std::string disagreementText(const char* kind, size_t index, const VkasRay& ray, Category c, const Judgement& j,
+                             bool anyHit);
 
 class Json {
 public:
