@@ -4,6 +4,7 @@
 // thread and against Embree's best call on all threads), hit agreement, deferred-build thread scaling, and the
 // issue's targets. Prints one table and optionally writes JSON. See docs/PERFORMANCE.md ("Comparison with Embree").
 #include "embree_side.hpp"
+#include "judge.hpp"
 #include "rays.hpp"
 #include "report.hpp"
 #include "scenes.hpp"
@@ -29,7 +30,7 @@ struct Options {
     unsigned instances = 0;
     std::string json, threadsList, scalingScene, dataDir;
     bool quick = false, noScaling = false;
-    size_t showDisagreements = 0;
+    std::string showDisagreements;  // empty: none; "all" or a number: that many rays per kind
 };
 
 struct Target {
@@ -212,6 +213,10 @@ void Bench::runScene(const Scene& sc) {
     double emBestN[3] = {};
     std::string agreementText[3];
     const size_t n = o_.rays;
+    const Judge judge(sc);  // the oracle, for the rays where vkas and Embree differ
+    size_t showLimit = 0;
+    if (!o_.showDisagreements.empty())
+        showLimit = o_.showDisagreements == "all" ? SIZE_MAX : size_t(std::stoull(o_.showDisagreements));
     for (int k = 0; k < 3; ++k) {
         const bool anyHit = k == 2, coherent = k == 0;
         const char* kind = rayKindName(RayKind(k));
@@ -243,34 +248,35 @@ void Bench::runScene(const Scene& sc) {
                     ratio(rate[k][3] / emBestN[k]).c_str());
         // Agreement with Embree, and vkas's paths with each other.
         if (anyHit) emN.trace(EmbreeCall::One, false, false, rays[k], emClosest, o_.threads, 1);
-        const Agreement g = compareHits(rays[k], vkBatch1[k], em1Hits, anyHit, anyHit ? &emClosest : nullptr);
-        const size_t rqDiff = countDifferent(vkBatch1[k], rqHits), nDiff = countDifferent(vkBatch1[k], batchN);
-        auto exactT = [&](size_t i, const Hit& h) {  // the ray against the hit triangle's plane, in double
-            const VkasRay& r = rays[k][i];
-            double v[3][3];
-            for (int c = 0; c < 3; ++c) {
-                const float* p = &sc.mesh.vertices[3 * sc.mesh.indices[3 * size_t(h.prim) + c]];
-                for (int a = 0; a < 3; ++a)
-                    v[c][a] = inst ? double(sc.instances[size_t(h.inst)][4 * a]) * p[0] + double(sc.instances[size_t(h.inst)][4 * a + 1]) * p[1] +
-                                         double(sc.instances[size_t(h.inst)][4 * a + 2]) * p[2] + sc.instances[size_t(h.inst)][4 * a + 3]
-                                   : p[a];
+        // Every ray where the results differ, decided by the oracle (judge.hpp).
+        const std::vector<size_t> differing = differingRays(rays[k], vkBatch1[k], em1Hits, anyHit);
+        std::vector<Judgement> verdicts(differing.size());
+        parallelFor(o_.threads, differing.size(), 1, [&](size_t b, size_t e) {
+            for (size_t d = b; d < e; ++d) {
+                const size_t i = differing[d];
+                verdicts[d] = judge.judge(rays[k][i], vkBatch1[k][i], em1Hits[i], anyHit);
             }
-            const double e1[3] = {v[1][0] - v[0][0], v[1][1] - v[0][1], v[1][2] - v[0][2]};
-            const double e2[3] = {v[2][0] - v[0][0], v[2][1] - v[0][1], v[2][2] - v[0][2]};
-            const double n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
-            double num = 0, den = 0;
-            for (int a = 0; a < 3; ++a) num += n[a] * (v[0][a] - r.origin[a]), den += n[a] * double(r.direction[a]);
-            return num / den;
-        };
-        for (const std::string& e : examples(rays[k], vkBatch1[k], em1Hits, anyHit, o_.showDisagreements, exactT))
-            std::printf("    %s %s\n", kind, e.c_str());
+        });
+        const Agreement g = compareHits(rays[k], vkBatch1[k], em1Hits, anyHit, anyHit ? &emClosest : nullptr, differing, verdicts);
+        const size_t rqDiff = countDifferent(vkBatch1[k], rqHits), nDiff = countDifferent(vkBatch1[k], batchN);
+        for (size_t d = 0; d < differing.size() && d < showLimit; ++d) {
+            const size_t i = differing[d];
+            const Category c = classify(rays[k][i], vkBatch1[k][i], em1Hits[i], anyHit, anyHit ? emClosest[i] : Hit{});
+            std::printf("    %s\n", disagreementText(kind, i, rays[k][i], c, verdicts[d], anyHit).c_str());
+        }
         agreementText[k] = std::string(kind) + " vs " + e1 + ": " + describe(g, anyHit) +
                            "; vkas ray query vs batch: " + std::to_string(rqDiff) + " differ, batch " +
                            std::to_string(o_.threads) + " threads vs 1: " + std::to_string(nDiff) + " differ";
         json.begin(nullptr, '{').field("rays", kind).field("agreement_rays", double(g.rays));
         json.field("hit_miss", double(g.hitMiss)).field("hit_miss_at_edge", double(g.hitMissAtEdge));
         json.field("hit_miss_at_tmax", double(g.hitMissAtEnd)).field("ties", double(g.tie));
-        json.field("different_hits_past_edge", double(g.differentHitAtEdge)).field("different_hits", double(g.differentHit)).field("unexplained", double(g.disagreements()));
+        json.field("different_hits_past_edge", double(g.differentHitAtEdge)).field("different_hits", double(g.differentHit));
+        json.field("same_primitive_t_beyond_tolerance", double(g.sameBeyondT)).field("differing", double(g.differing));
+        json.field("oracle_both_acceptable", double(g.bothAcceptable)).field("oracle_vkas_right", double(g.vkasRight));
+        json.field("oracle_embree_right", double(g.embreeRight)).field("unexplained", double(g.disagreements()));
+        json.field("exact_vkas_only", double(g.exactVkasOnly)).field("exact_embree_only", double(g.exactEmbreeOnly));
+        json.field("exact_neither", double(g.exactNeither)).field("max_vkas_error_float_units", g.maxVkasError);
+        json.field("max_embree_error_float_units", g.maxEmbreeError);
         json.field("max_rel_t_diff", g.maxRelT).field("max_t_diff_over_tolerance", g.maxTolT).field("ray_query_vs_batch_differ", double(rqDiff));
         json.field("batch_threads_vs_1_differ", double(nDiff)).end('}');
     }
@@ -354,7 +360,16 @@ int main(int argc, char** argv) {
     app.add_option("--threads-list", o.threadsList, "joined-thread counts of the scaling runs (default 1,2,4,8,16; 1,2 with --quick)");
     app.add_option("--scaling-scene", o.scalingScene, "scene of the scaling runs (default bunny-4m; bunny with --quick)");
     app.add_flag("--no-scaling", o.noScaling, "skip the deferred-build scaling runs");
-    app.add_option("--show-disagreements", o.showDisagreements, "print up to N rays per kind where vkas and Embree differ");
+    app.add_option("--show-disagreements", o.showDisagreements,
+                   "print every ray where vkas and Embree differ (or the first N of each kind), with both hits and the "
+                   "oracle's verdict")
+        ->expected(0, 1)
+        ->default_str("all")
+        ->check([](const std::string& v) {
+            return v == "all" || (!v.empty() && v.find_first_not_of("0123456789") == std::string::npos)
+                       ? std::string()
+                       : std::string("expects a count or 'all'");
+        });
     app.add_option("--json", o.json, "write the results as JSON to this file");
     app.add_option("--data-dir", o.dataDir, "where scripts/setup-bench.sh extracted the CGAL meshes");
     app.add_flag("--quick", o.quick, "a short smoke run: the bunny and a small instance scene, few rays, one repetition");

@@ -18,7 +18,9 @@ Hit toHit(const VkasHit& h) {
     return r;
 }
 
-VkAccelerationStructureGeometryKHR triangles(const Mesh& m, const float* vertices) {
+}  // namespace
+
+VkAccelerationStructureGeometryKHR triangleGeometry(const Mesh& m, const float* vertices) {
     VkAccelerationStructureGeometryKHR g{VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_GEOMETRY_KHR};
     g.geometryType = VK_GEOMETRY_TYPE_TRIANGLES_KHR;
     g.flags = VK_GEOMETRY_OPAQUE_BIT_KHR;
@@ -48,6 +50,8 @@ std::vector<VkAccelerationStructureInstanceKHR> instanceRecords(const std::vecto
     }
     return records;
 }
+
+namespace {
 
 VkAccelerationStructureGeometryKHR instances(const std::vector<VkAccelerationStructureInstanceKHR>& records) {
     VkAccelerationStructureGeometryKHR g{VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_GEOMETRY_KHR};
@@ -137,7 +141,7 @@ uint64_t VkasEngine::compactedSize(const Structure& s) {
 
 VkasEngine::Build VkasEngine::buildBottom(const Mesh& mesh, VkBuildAccelerationStructureFlagsKHR flags, int reps,
                                           unsigned deferredThreads) {
-    const VkAccelerationStructureGeometryKHR g = triangles(mesh, mesh.vertices.data());
+    const VkAccelerationStructureGeometryKHR g = triangleGeometry(mesh, mesh.vertices.data());
     VkAccelerationStructureBuildGeometryInfoKHR info{VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_BUILD_GEOMETRY_INFO_KHR};
     info.type = VK_ACCELERATION_STRUCTURE_TYPE_BOTTOM_LEVEL_KHR;
     info.flags = flags | VK_BUILD_ACCELERATION_STRUCTURE_ALLOW_COMPACTION_BIT_KHR;
@@ -182,7 +186,7 @@ VkasEngine::Build VkasEngine::buildTop(const std::vector<Transform>& xs, VkAccel
 
 double VkasEngine::refitBottom(const Structure& s, const Mesh& mesh, const std::vector<float>& moved,
                                VkBuildAccelerationStructureFlagsKHR flags, int reps) {
-    VkAccelerationStructureGeometryKHR g = triangles(mesh, moved.data());
+    VkAccelerationStructureGeometryKHR g = triangleGeometry(mesh, moved.data());
     VkAccelerationStructureBuildGeometryInfoKHR info{VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_BUILD_GEOMETRY_INFO_KHR};
     info.type = VK_ACCELERATION_STRUCTURE_TYPE_BOTTOM_LEVEL_KHR;
     info.flags = flags | VK_BUILD_ACCELERATION_STRUCTURE_ALLOW_COMPACTION_BIT_KHR;

@@ -8,6 +8,13 @@
 
 namespace vb {
 
+// What the builds read, also read by the oracle (judge.cpp): the mesh as one opaque triangle geometry (R32G32B32
+// vertices, 32-bit indices), and the instance records of `xs` referencing `blas` (one identity instance when xs is
+// empty; custom index = instance index, mask 0xFF, no flags).
+VkAccelerationStructureGeometryKHR triangleGeometry(const Mesh& mesh, const float* vertices);
+std::vector<VkAccelerationStructureInstanceKHR> instanceRecords(const std::vector<Transform>& xs,
+                                                                VkAccelerationStructureKHR blas);
+
 class VkasEngine {
 public:
     struct Structure {

@@ -355,7 +355,109 @@ bool mayHitBox(const Vec3& o, const Vec3& d, Vec3 lo, Vec3 hi, double tMin, doub
     if (!std::isinf(tMax) && t0 > tMax + 1e-3 * (std::fabs(tMax) + std::fabs(t0) + 1.0)) return false;
     return true;
 }
+
+constexpr double kRel = 1e-5;
+
+// An instance's object-space ray and the magnitudes the tolerances scale with.
+struct ObjectRay {
+    Vec3 o, d;
+    double minv;         // infinity norm of the inverse's 3x3 part
+    double originScale;  // magnitude of the coordinates the world-to-object transform of the origin involves
+    double dlen;         // |d|
+    double dwMax;        // largest world direction component
+};
+
+ObjectRay objectRay(const Instance& inst, const Vec3& ow, const Vec3& dw) {
+    const auto& M = inst.toObject;
+    ObjectRay r;
+    for (int k = 0; k < 3; ++k) {
+        r.o[k] = M[k][0] * ow[0] + M[k][1] * ow[1] + M[k][2] * ow[2] + M[k][3];
+        r.d[k] = M[k][0] * dw[0] + M[k][1] * dw[1] + M[k][2] * dw[2];
+    }
+    r.minv = 0;
+    for (int k = 0; k < 3; ++k) r.minv = std::max(r.minv, std::fabs(M[k][0]) + std::fabs(M[k][1]) + std::fabs(M[k][2]));
+    r.originScale = maxAbs(r.o) + r.minv * maxAbs(ow) + std::max({std::fabs(M[0][3]), std::fabs(M[1][3]), std::fabs(M[2][3])});
+    r.dlen = norm(r.d);
+    r.dwMax = maxAbs(dw);
+    return r;
+}
+
+// One triangle against an object-space ray, before any culling.
+TriangleTest testTriangle(const Triangle& tri, const ObjectRay& r, double tMin, double tMax) {
+    TriangleTest x;
+    if (!tri.active) return x;
+    const Vec3 &o = r.o, &d = r.d;
+    const Vec3 e1 = sub(tri.v[1], tri.v[0]), e2 = sub(tri.v[2], tri.v[0]);
+    const Vec3 n = cross(e1, e2);
+    const double dn = dot(n, d);
+    x.status = TriangleStatus::EdgeOn;
+    x.dn = dn;
+    if (dn == 0) return x;  // edge-on (or degenerate): never a candidate
+    const Vec3 pvec = cross(d, e2);
+    const double det = dot(e1, pvec);  // == -dn
+    const Vec3 tvec = sub(o, tri.v[0]);
+    const double u = dot(tvec, pvec) / det;
+    const Vec3 qvec = cross(tvec, e1);
+    const double v = dot(d, qvec) / det;
+    const double t = dot(e2, qvec) / det;
+    const double w = 1.0 - u - v;
+    const double nlen = norm(n);
+    const double cosv = std::fabs(dn) / (nlen * r.dlen);
+    x.t = t, x.bary[0] = w, x.bary[1] = u, x.bary[2] = v, x.cosine = cosv;
+    if (!(cosv > 0)) return x;
+    const Vec3 hit{o[0] + t * d[0], o[1] + t * d[1], o[2] + t * d[2]};
+    const double scale = std::max({r.originScale, maxAbs(hit), std::fabs(t) * r.minv * r.dwMax, maxAbs(tri.v[0]),
+                                   maxAbs(tri.v[1]), maxAbs(tri.v[2]), 1e-30});
+    const double tolDist = kRel * scale;
+    // Heights of the triangle over each edge: distance from vertex k to the opposite edge.
+    const double h0 = nlen / norm(sub(tri.v[2], tri.v[1]));
+    const double h1 = nlen / norm(e2);
+    const double h2 = nlen / norm(e1);
+    const double heights[3] = {h0, h1, h2};
+    bool inside = true, near = true;
+    double baryTol = 0;
+    for (int k = 0; k < 3; ++k) {
+        double margin = std::max(kRel, tolDist / (heights[k] * cosv));
+        if (!std::isfinite(margin)) margin = std::numeric_limits<double>::infinity();
+        baryTol = std::max(baryTol, margin);
+        if (!(x.bary[k] > margin)) inside = false;
+        if (!(x.bary[k] >= -margin)) near = false;
+    }
+    double tTol = kRel * std::fabs(t) + tolDist / (r.dlen * std::max(cosv, 1e-6));
+    // So ill-conditioned (nearly degenerate after rounding) that the whole triangle lies within the
+    // tolerance: its plane, hence t, is not determined by float arithmetic.
+    if (baryTol > 0.5) tTol = std::numeric_limits<double>::infinity();
+    x.baryTolerance = baryTol, x.tTolerance = tTol, x.inside = inside, x.tolDistance = tolDist, x.scale = scale;
+    for (int k = 0; k < 3; ++k) x.distance[k] = x.bary[k] * heights[k];
+    x.inRange = t > tMin + tTol && t < tMax - tTol;
+    const bool nearRange = t > tMin - tTol && t < tMax + tTol;
+    x.status = !near ? TriangleStatus::Outside : !nearRange ? TriangleStatus::OutOfRange : TriangleStatus::Candidate;
+    return x;
+}
 }  // namespace
+
+const char* triangleStatusName(TriangleStatus s) {
+    switch (s) {
+        case TriangleStatus::Candidate: return "candidate";
+        case TriangleStatus::Inactive: return "inactive";
+        case TriangleStatus::EdgeOn: return "edge-on";
+        case TriangleStatus::Outside: return "outside the triangle beyond the margin";
+        case TriangleStatus::OutOfRange: return "outside [tMin, tMax] beyond the tolerance";
+    }
+    return "?";
+}
+
+TriangleTest examineTriangle(const Scene& scene, const Ray& ray, int32_t instanceId, int32_t geometryIndex,
+                             int32_t primitiveIndex) {
+    if (instanceId < 0 || size_t(instanceId) >= scene.instances.size()) return {};
+    const Instance& inst = scene.instances[size_t(instanceId)];
+    if (!inst.blas || geometryIndex < 0 || size_t(geometryIndex) >= inst.blas->geometries.size()) return {};
+    const Geometry& geom = inst.blas->geometries[size_t(geometryIndex)];
+    if (primitiveIndex < 0 || size_t(primitiveIndex) >= geom.triangles.size()) return {};
+    const ObjectRay r = objectRay(inst, {ray.origin[0], ray.origin[1], ray.origin[2]},
+                                  {ray.direction[0], ray.direction[1], ray.direction[2]});
+    return testTriangle(geom.triangles[size_t(primitiveIndex)], r, ray.tMin, ray.tMax);
+}
 
 Result trace(const Scene& scene, const Ray& ray, uint32_t rayFlags, uint32_t cullMask) {
     Result result;
@@ -363,23 +465,15 @@ Result trace(const Scene& scene, const Ray& ray, uint32_t rayFlags, uint32_t cul
     const Vec3 ow{ray.origin[0], ray.origin[1], ray.origin[2]};
     const Vec3 dw{ray.direction[0], ray.direction[1], ray.direction[2]};
     const double tMin = ray.tMin, tMax = ray.tMax;
-    constexpr double kRel = 1e-5;
 
     for (size_t id = 0; id < scene.instances.size(); ++id) {
         const Instance& inst = scene.instances[id];
         if (!inst.blas) continue;
         if ((inst.mask & mask) == 0) continue;
-        const auto& M = inst.toObject;
-        Vec3 o, d;
-        for (int r = 0; r < 3; ++r) {
-            o[r] = M[r][0] * ow[0] + M[r][1] * ow[1] + M[r][2] * ow[2] + M[r][3];
-            d[r] = M[r][0] * dw[0] + M[r][1] * dw[1] + M[r][2] * dw[2];
-        }
+        const ObjectRay objRay = objectRay(inst, ow, dw);
+        const Vec3 &o = objRay.o, &d = objRay.d;
         if (!mayHitBox(o, d, inst.blas->lo, inst.blas->hi, tMin, tMax)) continue;
-        double minv = 0;  // infinity norm of the inverse's 3x3 part
-        for (int r = 0; r < 3; ++r) minv = std::max(minv, std::fabs(M[r][0]) + std::fabs(M[r][1]) + std::fabs(M[r][2]));
-        const double originScale = maxAbs(o) + minv * maxAbs(ow) + std::max({std::fabs(M[0][3]), std::fabs(M[1][3]), std::fabs(M[2][3])});
-        const double dlen = norm(d);
+        const double minv = objRay.minv, originScale = objRay.originScale;
 
         for (size_t gi = 0; gi < inst.blas->geometries.size(); ++gi) {
             const Geometry& geom = inst.blas->geometries[gi];
@@ -456,64 +550,22 @@ Result trace(const Scene& scene, const Ray& ray, uint32_t rayFlags, uint32_t cul
             }
             for (size_t pi = 0; pi < geom.triangles.size(); ++pi) {
                 const Triangle& tri = geom.triangles[pi];
-                if (!tri.active) continue;
-                const Vec3 e1 = sub(tri.v[1], tri.v[0]), e2 = sub(tri.v[2], tri.v[0]);
-                const Vec3 n = cross(e1, e2);
-                const double dn = dot(n, d);
-                if (dn == 0) continue;  // edge-on (or degenerate): never a candidate
-                const Vec3 pvec = cross(d, e2);
-                const double det = dot(e1, pvec);  // == -dn
-                const Vec3 tvec = sub(o, tri.v[0]);
-                const double u = dot(tvec, pvec) / det;
-                const Vec3 qvec = cross(tvec, e1);
-                const double v = dot(d, qvec) / det;
-                const double t = dot(e2, qvec) / det;
-                const double w = 1.0 - u - v;
-                const double nlen = norm(n);
-                const double cosv = std::fabs(dn) / (nlen * dlen);
-                if (!(cosv > 0)) continue;
-                const Vec3 hit{o[0] + t * d[0], o[1] + t * d[1], o[2] + t * d[2]};
-                const double scale = std::max({originScale, maxAbs(hit), std::fabs(t) * minv * maxAbs(dw),
-                                               maxAbs(tri.v[0]), maxAbs(tri.v[1]), maxAbs(tri.v[2]), 1e-30});
-                const double tolDist = kRel * scale;
-                // Heights of the triangle over each edge: distance from vertex k to the opposite edge.
-                const double h0 = nlen / norm(sub(tri.v[2], tri.v[1]));
-                const double h1 = nlen / norm(e2);
-                const double h2 = nlen / norm(e1);
-                const double bary[3] = {w, u, v};
-                const double heights[3] = {h0, h1, h2};
-                bool inside = true, near = true;
-                double baryTol = 0;
-                for (int k = 0; k < 3; ++k) {
-                    double margin = std::max(kRel, tolDist / (heights[k] * cosv));
-                    if (!std::isfinite(margin)) margin = std::numeric_limits<double>::infinity();
-                    baryTol = std::max(baryTol, margin);
-                    if (!(bary[k] > margin)) inside = false;
-                    if (!(bary[k] >= -margin)) near = false;
-                }
-                if (!near) continue;
-                double tTol = kRel * std::fabs(t) + tolDist / (dlen * std::max(cosv, 1e-6));
-                // So ill-conditioned (nearly degenerate after rounding) that the whole triangle lies within the
-                // tolerance: its plane, hence t, is not determined by float arithmetic.
-                if (baryTol > 0.5) tTol = std::numeric_limits<double>::infinity();
-                bool inRange = t > tMin + tTol && t < tMax - tTol;
-                bool nearRange = t > tMin - tTol && t < tMax + tTol;
-                if (!nearRange) continue;
-
-                bool front = dn < 0;
+                const TriangleTest x = testTriangle(tri, objRay, tMin, tMax);
+                if (x.status != TriangleStatus::Candidate) continue;
+                bool front = x.dn < 0;
                 if (inst.flags & kInstFlip) front = !front;
                 // Nearly edge-on, or so ill-conditioned (nearly degenerate after rounding) that the whole triangle is
                 // within the tolerance: float arithmetic may decide the facing either way.
-                const bool facingAmbiguous = cosv < 1e-6 || baryTol > 0.5;
-                bool optional = !inside || !inRange || facingAmbiguous;
+                const bool facingAmbiguous = x.cosine < 1e-6 || x.baryTolerance > 0.5;
+                bool optional = !x.inside || !x.inRange || facingAmbiguous;
                 if (!(inst.flags & kInstCullDisable)) {
                     const bool cullThis = ((rayFlags & kRayCullBack) && !front) || ((rayFlags & kRayCullFront) && front);
                     if (cullThis && !facingAmbiguous) continue;
                 }
                 Candidate c;
-                c.t = t;
-                c.bary[0] = u;
-                c.bary[1] = v;
+                c.t = x.t;
+                c.bary[0] = x.bary[1];
+                c.bary[1] = x.bary[2];
                 c.instanceId = int32_t(id);
                 c.geometryIndex = int32_t(gi);
                 c.primitiveIndex = int32_t(pi);
@@ -523,8 +575,8 @@ Result trace(const Scene& scene, const Ray& ray, uint32_t rayFlags, uint32_t cul
                 c.facingAmbiguous = facingAmbiguous;
                 c.opaque = opaque;
                 c.optional = optional;
-                c.tTolerance = tTol;
-                c.baryTolerance = baryTol;
+                c.tTolerance = x.tTolerance;
+                c.baryTolerance = x.baryTolerance;
                 for (int k = 0; k < 3; ++k) {
                     c.objectOrigin[k] = o[k];
                     c.objectDirection[k] = d[k];

@@ -160,6 +160,35 @@ bool boxInterval(const Vec3& o, const Vec3& d, const Vec3& lo, const Vec3& hi, d
 // rayFlags are the SPIR-V RayFlags bits; only the low 8 bits of cullMask are used.
 Result trace(const Scene& scene, const Ray& ray, uint32_t rayFlags, uint32_t cullMask);
 
+// One triangle of one instance against a ray, tested as trace() tests it, whatever the outcome: for reports that
+// say how far a hit an implementation reported is from the oracle's candidates (bench/vs_embree). The instance
+// mask, ray flags and facing culling are not applied.
+enum class TriangleStatus {
+    Candidate,   // trace() lists it (required when inside and inRange, and not nearly edge-on)
+    Inactive,    // inactive, or no such instance, geometry or triangle
+    EdgeOn,      // the ray is parallel to its plane (or it is degenerate)
+    Outside,     // a barycentric weight is below -baryTolerance
+    OutOfRange,  // t is outside [tMin - tTolerance, tMax + tTolerance]
+};
+const char* triangleStatusName(TriangleStatus s);
+struct TriangleTest {
+    TriangleStatus status = TriangleStatus::Inactive;
+    double t = 0;                // the ray's parameter at the triangle's plane (the same in world and object space)
+    double bary[3] = {0, 0, 0};  // weights of vertices 0, 1 and 2
+    double baryTolerance = 0;    // within this of an edge (a weight of 0), a candidate is optional
+    double tTolerance = 0;       // within this of tMin or tMax, a candidate is optional
+    double distance[3] = {0, 0, 0};  // signed distance of the hit point from the edge opposite vertex k (object space)
+    double scale = 0;            // magnitude of the coordinates involved (origins, transform, hit point, vertices)
+    double tolDistance = 0;      // the distance the tolerances allow for (object space): 1e-5 scale; margin k =
+                                 // tolDistance / (height k * cosine), at least 1e-5
+    double cosine = 0;           // |cos| of the angle between the object-space ray and the triangle's normal
+    double dn = 0;               // normal . object direction; < 0: front face (before the instance's flip flag)
+    bool inside = false;         // every weight above baryTolerance
+    bool inRange = false;        // tMin + tTolerance < t < tMax - tTolerance
+};
+TriangleTest examineTriangle(const Scene& scene, const Ray& ray, int32_t instanceId, int32_t geometryIndex,
+                             int32_t primitiveIndex);
+
 // ---- [NV-motion] VK_NV_ray_tracing_motion_blur --------------------------------------------------------------------
 // Motion is evaluated by turning the structures into the static ones they are at a time, then tracing those.
 //
