@@ -675,7 +675,9 @@ TEST_F(operations_misc, serialized_header) {
         // the device address of instance k's bottom level (0 for inactive ones), never the handle value.
         for (size_t k = 0; k < n; ++k) {
             EXPECT_EQ(b.handle(k), instances[k].blas ? address(instances[k].blas) : 0u) << "slot " << k;
-            if (instances[k].blas) EXPECT_NE(b.handle(k), instances[k].blas->reference()) << "slot " << k;
+            if (instances[k].blas) {
+                EXPECT_NE(b.handle(k), instances[k].blas->reference()) << "slot " << k;
+            }
         }
         // The integrity hash is XXH3-64 of the header's 56 bytes and the block.
         EXPECT_EQ(b.storedHash(), b.computedHash());
@@ -1353,7 +1355,9 @@ TEST_F(operations_corrupt, every_single_bit_flip_is_rejected) {
                 ++flips;
             }
             // Restore the destination's structure for the next byte (each failure must undo it).
-            if (byte % 97 == 0) ASSERT_EQ(deserializeOnRaw(b, dst), VK_SUCCESS) << "byte " << byte;
+            if (byte % 97 == 0) {
+                ASSERT_EQ(deserializeOnRaw(b, dst), VK_SUCCESS) << "byte " << byte;
+            }
         }
         ASSERT_EQ(deserializeOnRaw(b, dst), VK_SUCCESS);
     }

@@ -2,6 +2,7 @@
 
 #include <cstring>
 
+#include "engine/alongside.hpp"
 #include "engine/byte_io.hpp"
 #include <vector>
 
@@ -192,11 +193,15 @@ CheckResult checkSerialized(const std::byte* data, uint64_t size, serial::Serial
     serial::SerializedView v;
     const CheckResult layout = checkSerializedLayout(data, size, &v);
     if (!layout.ok()) return layout;
-    // Serialized layout 2: any change of a hashed byte (everything but the handle array) is caught here, before the
-    // block is read for its structure.
-    if (v.layout == serial::Layout::V2 && serial::integrityHash(v) != v.storedHash)
-        return corrupt("the integrity hash does not match the data (the blob was changed or truncated)");
-    const CheckResult block = checkLoadedBlock(v, v.block);
+    // Serialized layout 2: any change of a hashed byte (everything but the handle array) is caught by the hash. It is
+    // computed beside the structural checks (on a thread of its own for a large blob); both must pass.
+    bool hashMatches = true;
+    CheckResult block;
+    alongside(
+        v.layout == serial::Layout::V2 && v.deserializedSize >= (1u << 20),
+        [&] { hashMatches = v.layout != serial::Layout::V2 || serial::integrityHash(v) == v.storedHash; },
+        [&] { block = checkLoadedBlock(v, v.block); });
+    if (!hashMatches) return corrupt("the integrity hash does not match the data (the blob was changed)");
     if (!block.ok()) return block;
     if (view) *view = v;
     return {};

@@ -31,8 +31,8 @@ CheckResult checkBlock(const std::byte* block, uint64_t size);
 // counts, the integrity hash (layout 2) and the block (checkLoadedBlock). On success fills `view` (optional).
 CheckResult checkSerialized(const std::byte* data, uint64_t size, serial::SerializedView* view = nullptr);
 
-// The parts of checkSerialized, for a loader that copies the block while it hashes it and then checks the copy:
-// the header alone (UUIDs, sizes, counts; reads only the first kHeaderSize bytes and, in layout 2, the stored hash);
+// The parts of checkSerialized: the header alone (UUIDs, sizes, counts; reads only the first kHeaderSize bytes and,
+// in layout 2, the stored hash);
 CheckResult checkSerializedLayout(const std::byte* data, uint64_t size, serial::SerializedView* view);
 // and a block of view.deserializedSize bytes (the blob's or a copy of it) against that header.
 CheckResult checkLoadedBlock(const serial::SerializedView& view, const std::byte* block);

@@ -31,12 +31,4 @@ void IntegrityHash::add(const void* data, size_t size) {
 
 uint64_t IntegrityHash::digest() const { return XXH3_64bits_digest(state(state_)); }
 
-void IntegrityHash::copyAndAdd(std::byte* dst, const std::byte* src, size_t size) {
-    for (size_t at = 0; at < size; at += kChunk) {
-        const size_t n = size - at < kChunk ? size - at : kChunk;
-        add(src + at, n);  // brings the chunk into cache; the copy then reads it from there
-        std::memcpy(dst + at, src + at, n);
-    }
-}
-
 }  // namespace vkas::serial

@@ -3,6 +3,7 @@
 #include <cstring>
 
 #include "engine/byte_io.hpp"
+#include "engine/alongside.hpp"
 #include "engine/integrity_hash.hpp"
 
 namespace vkas::serial {
@@ -43,41 +44,74 @@ void copyBlock(const std::byte* src, std::byte* dst) {
     if (src != dst) std::memmove(dst, src, compactedSize(src));
 }
 
+namespace {
+
+// Above this many bytes the hash runs on a thread of its own beside the copy or the structural checks (a thread
+// costs tens of microseconds; hashing 1 MiB about as much).
+constexpr uint64_t kHashAlongsideBytes = 1 << 20;
+
+// The integrity hash of a serialized block, computed from the structure's own block: its bytes as they will be
+// written, that is with every instance reference read as 0.
+uint64_t hashOfBlock(const std::byte* head, const std::byte* block, const format::Header& h) {
+    IntegrityHash hash;
+    hash.add(head, kHeaderSize);
+    if (h.type != uint32_t(format::StructureType::TopLevel)) {
+        hash.add(block, h.usedSize);
+        return hash.digest();
+    }
+    const uint64_t stride = recordSize(h.type, h.primitiveType, h.buildFlags);
+    uint64_t nextReference = h.recordOffset + kInstanceReferenceOffset, recordsLeft = h.recordCount;
+    alignas(64) std::byte chunk[IntegrityHash::kChunk];
+    for (uint64_t at = 0; at < h.usedSize; at += IntegrityHash::kChunk) {
+        const uint64_t end = h.usedSize - at < IntegrityHash::kChunk ? h.usedSize : at + IntegrityHash::kChunk;
+        if (recordsLeft == 0 || nextReference >= end) {
+            hash.add(block + at, end - at);
+            continue;
+        }
+        std::memcpy(chunk, block + at, end - at);
+        for (; recordsLeft != 0 && nextReference < end; --recordsLeft, nextReference += stride)
+            store64(chunk + (nextReference - at), 0);
+        hash.add(chunk, end - at);
+    }
+    return hash.digest();
+}
+
+}  // namespace
+
 void serializeBlock(const std::byte* block, std::byte* out, ReferenceMapper toAddress, const void* context) {
     const format::Header h = loadHeader(block);
     const uint64_t n = handleCount(block);
     const bool topLevel = h.type == uint32_t(format::StructureType::TopLevel);
-    std::memcpy(out + kDriverUuidOffset, kDriverUuidV2, kUuidSize);
-    std::memcpy(out + kCompatibilityUuidOffset, kCompatibilityUuidV1, kUuidSize);
-    store64(out + kSerializedSizeOffset, serializedSize(block));
-    store64(out + kDeserializedSizeOffset, h.usedSize);
-    store64(out + kHandleCountOffset, n);
-    // Spec (serialized header): "The corresponding handles matching the values returned by
-    // vkGetAccelerationStructureDeviceAddressKHR or vkGetAccelerationStructureHandleNV are tightly packed in the
-    // buffer following the count." Slot k belongs to the instance whose instanceId is k.
+    std::byte head[kHeaderSize];
+    std::memcpy(head + kDriverUuidOffset, kDriverUuidV2, kUuidSize);
+    std::memcpy(head + kCompatibilityUuidOffset, kCompatibilityUuidV1, kUuidSize);
+    store64(head + kSerializedSizeOffset, serializedSize(block));
+    store64(head + kDeserializedSizeOffset, h.usedSize);
+    store64(head + kHandleCountOffset, n);
     std::byte* handles = out + kHandlesOffset;
-    std::memset(handles, 0, 8 * n);
-    const uint64_t stride = recordSize(h.type, h.primitiveType, h.buildFlags);
-    if (topLevel)
-        for (uint64_t r = 0; r < h.recordCount; ++r) {
-            const std::byte* rec = block + h.recordOffset + r * stride;
-            const uint32_t slot = load32(rec + kInstanceIdOffset);
-            const uint64_t reference = load64(rec + kInstanceReferenceOffset);
-            if (slot < n && reference != 0) store64(handles + 8 * uint64_t(slot), toAddress(context, reference));
-        }
-    // The block, chunk by chunk: copy, clear the instance references in the chunk, hash it while it is in cache.
-    IntegrityHash hash;
-    hash.add(out, kHeaderSize);
     std::byte* payload = handles + 8 * n + kIntegrityHashSize;
-    uint64_t nextReference = h.recordOffset + kInstanceReferenceOffset, recordsLeft = topLevel ? h.recordCount : 0;
-    for (uint64_t at = 0; at < h.usedSize; at += IntegrityHash::kChunk) {
-        const uint64_t end = h.usedSize - at < IntegrityHash::kChunk ? h.usedSize : at + IntegrityHash::kChunk;
-        std::memcpy(payload + at, block + at, end - at);
-        for (; recordsLeft != 0 && nextReference < end; --recordsLeft, nextReference += stride)
-            store64(payload + nextReference, 0);
-        hash.add(payload + at, end - at);
-    }
-    store64(handles + 8 * n, hash.digest());
+    const uint64_t stride = recordSize(h.type, h.primitiveType, h.buildFlags);
+    uint64_t hash = 0;
+    alongside(
+        h.usedSize >= kHashAlongsideBytes, [&] { hash = hashOfBlock(head, block, h); },
+        [&] {
+            std::memcpy(out, head, kHeaderSize);
+            // Spec (serialized header): "The corresponding handles matching the values returned by
+            // vkGetAccelerationStructureDeviceAddressKHR or vkGetAccelerationStructureHandleNV are tightly packed
+            // in the buffer following the count." Slot k belongs to the instance whose instanceId is k.
+            std::memset(handles, 0, 8 * n);
+            std::memcpy(payload, block, h.usedSize);
+            if (!topLevel) return;
+            for (uint64_t r = 0; r < h.recordCount; ++r) {
+                const std::byte* rec = block + h.recordOffset + r * stride;
+                const uint32_t slot = load32(rec + kInstanceIdOffset);
+                const uint64_t reference = load64(rec + kInstanceReferenceOffset);
+                if (slot < n && reference != 0) store64(handles + 8 * uint64_t(slot), toAddress(context, reference));
+                // The block keeps 0 there, so the hashed bytes depend only on the build inputs.
+                store64(payload + h.recordOffset + r * stride + kInstanceReferenceOffset, 0);
+            }
+        });
+    store64(handles + 8 * n, hash);
 }
 
 uint64_t integrityHash(const SerializedView& view) {
@@ -90,17 +124,6 @@ uint64_t integrityHash(const SerializedView& view) {
 void sealIntegrityHash(const SerializedView& view, std::byte* data) {
     if (view.layout != Layout::V2) return;
     store64(data + kHandlesOffset + 8 * view.handleCount, integrityHash(view));
-}
-
-uint64_t loadBlock(const SerializedView& view, std::byte* dst) {
-    if (view.layout != Layout::V2) {
-        std::memcpy(dst, view.block, view.deserializedSize);
-        return 0;
-    }
-    IntegrityHash hash;
-    hash.add(view.data, kHeaderSize);
-    hash.copyAndAdd(dst, view.block, view.deserializedSize);
-    return hash.digest();
 }
 
 bool bindReferences(const SerializedView& view, std::byte* dst, ReferenceMapper toReference, const void* context) {

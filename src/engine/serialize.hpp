@@ -74,7 +74,8 @@ void copyBlock(const std::byte* src, std::byte* dst);
 // a stored instance reference to the handle-array value when serializing, and back when loading. 0: none.
 using ReferenceMapper = uint64_t (*)(const void* context, uint64_t value);
 
-// Writes serializedSize(block) bytes at `out` (any alignment) in layout 2. Handle slot k holds
+// Writes serializedSize(block) bytes at `out` (any alignment) in layout 2 (a large block is hashed on a thread of
+// its own while it is copied). Handle slot k holds
 // toAddress(reference) of the instance whose instanceId is k (0 for an inactive instance); the block's own instance
 // references are written as 0, so the hashed bytes depend only on the build inputs.
 void serializeBlock(const std::byte* block, std::byte* out, ReferenceMapper toAddress, const void* context);
@@ -95,11 +96,6 @@ struct SerializedView {
 uint64_t integrityHash(const SerializedView& view);
 // Rewrites the integrity hash of a layout-2 blob after its bytes were changed on purpose (tests, fuzzers).
 void sealIntegrityHash(const SerializedView& view, std::byte* data);
-
-// Copies the block of a blob whose layout checked out into `dst` (aligned like a structure's block, at least
-// view.deserializedSize bytes), hashing it on the way. Returns the integrity hash of the blob as copied (layout 2;
-// 0 for layout 1): the caller compares it with view.storedHash before it trusts `dst`.
-uint64_t loadBlock(const SerializedView& view, std::byte* dst);
 
 // Sets each instance reference of the loaded top level at `dst` to toReference(handles[instanceId]); an entry of 0
 // makes its instance inactive. Returns false, leaving some references unset, when a non-zero entry maps to 0.
