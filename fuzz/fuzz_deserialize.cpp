@@ -4,10 +4,11 @@
 // must either load them or reject them with an error, writing nothing, reading nothing outside the blob. What it
 // accepts is traced (ray queries, batch traces), cloned, serialized again and loaded again (byte-identical).
 //
-// Handle-array entries 1 to 11 are tokens the harness replaces by structures of the device (fuzz_common.hpp builds
+// Handle-array entries 1 to 13 are tokens the harness replaces by structures of the device (fuzz_common.hpp builds
 // them): 1 a triangle bottom level, 2 its device address, 3 AABBs, 4 spheres, 5 LSS, 6 a top level, 7 the
 // destination itself, 8 a structure never built, 9 a destroyed handle, 10 a structure of the other device, 11 the
-// AABB structure's address. Other values stay as they are (garbage, to be rejected or made inactive).
+// AABB structure's address, 12 a motion-triangle bottom level, 13 a motion top level. Other values stay as they are
+// (garbage, to be rejected or made inactive).
 #include <algorithm>
 #include <cstring>
 
@@ -68,6 +69,8 @@ uint64_t tokenValue(Device& d, Device& other, const Structure& dst, uint64_t tok
         case 9: return d.deadHandle;
         case 10: return uint64_t(other.blasTriangles.handle);
         case 11: return d.address(d.blasAabbs);
+        case 12: return uint64_t(d.blasMotion.handle);
+        case 13: return uint64_t(d.tlasMotion.handle);
         default: return token;
     }
 }
@@ -77,7 +80,7 @@ void replaceTokens(Device& d, Device& other, const Structure& dst, Region& blob)
     for (uint64_t k = 0; k < n && 56 + 8 * (k + 1) <= blob.size; ++k) {
         uint8_t* p = blob.data + 56 + 8 * k;
         const uint64_t v = load64(p);
-        if (v >= 1 && v <= 11) store64(p, tokenValue(d, other, dst, v));
+        if (v >= 1 && v <= 13) store64(p, tokenValue(d, other, dst, v));
     }
 }
 
@@ -117,7 +120,11 @@ void exercise(Device& d, Structure& dst, uint64_t deserializedSize, uint64_t ser
     if (type == 0) {
         fz::traceProbe(d, dst.handle, bounds, seed, seedSize);
     } else {
-        Structure top = d.buildSingleInstanceTlas(dst, seedSize ? seed[0] : 0);
+        // A bottom level built with motion goes into a motion top level (an instance type the seed chooses); others
+        // now and then too.
+        const uint8_t pick = seedSize > 1 ? seed[1] : 0;
+        const int motionType = (fz::builtWithMotion(block) || (pick & 4)) ? int(pick % 3) : -1;
+        Structure top = d.buildSingleInstanceTlas(dst, seedSize ? seed[0] : 0, motionType);
         fz::traceProbe(d, top.handle, bounds, seed, seedSize);
         d.destroyStructure(top);
     }
