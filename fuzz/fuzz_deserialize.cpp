@@ -200,6 +200,9 @@ VkResult runOn(Device& d, Device& other, const uint8_t* data, size_t size, bool 
     const uint64_t before = d.messages();
     const VkResult r = deserialize(d, dst, blob.data, (h & 3) == 1);
     const uint64_t reported = d.messages() - before;
+    if (std::getenv("VKAS_FUZZ_VERBOSE"))
+        std::fprintf(stderr, "vkas fuzz: the load (validation %s) returned %d after %llu validation message(s)\n",
+                     d.validation ? "on" : "off", int(r), (unsigned long long)reported);
     FZ_CHECK(std::memcmp(copy.data, blob.data, blob.size) == 0, "the load wrote into the serialized data");
     if (d.validation) {
         FZ_CHECK(r == VK_SUCCESS || r == VK_ERROR_VALIDATION_FAILED_EXT || r == VK_ERROR_INCOMPATIBLE_VERSION_KHR,
