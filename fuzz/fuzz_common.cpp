@@ -479,10 +479,11 @@ void traceProbe(Device& device, VkAccelerationStructureKHR topLevel, const float
     const uint32_t flagSets[] = {0, VKAS_RAY_FLAG_OPAQUE, extraFlags};
     for (uint32_t f = 0; f < 3; ++f)
         for (size_t i = 0; i < rays.size(); ++i) runQuery(topLevel, flagSets[f], rays[i], uint32_t(i + f));
-    // [NV-motion] Ray times (a time outside [0, 1], NaN included, is reported and traces nothing).
+    // [NV-motion] Each ray once more at one of three ray times (a time outside [0, 1], NaN included, is reported and
+    // traces nothing).
     const float times[3] = {0.25f, 1.0f, seedSize >= 6 ? loadFloat(seed + 2) : 0.75f};
-    for (uint32_t t = 0; t < 3; ++t)
-        for (size_t i = 0; i < rays.size(); ++i) runQuery(topLevel, t == 2 ? extraFlags : 0, rays[i], uint32_t(i + t), &times[t]);
+    for (size_t i = 0; i < rays.size(); ++i)
+        runQuery(topLevel, i % 3 == 2 ? extraFlags : 0, rays[i], uint32_t(i), &times[i % 3]);
     std::vector<VkasHit> hits(rays.size());
     const uint32_t n = uint32_t(rays.size());
     for (VkasTraceMode mode : {VKAS_TRACE_MODE_CLOSEST_HIT, VKAS_TRACE_MODE_ANY_HIT}) {
