@@ -19,6 +19,22 @@ enum : uint8_t {
     kBadGeometry = 1 << 7,    // spheres / LSS: no data structure in pNext; others: wrong geometry sType
 };
 
+// GeomSpec::motion bits. Triangles (any build; in a build without the motion flag validation reports them):
+enum : uint8_t {
+    kMotionTriangles = 1 << 0,      // chain a VkAccelerationStructureGeometryMotionTrianglesDataNV (time-1 vertices)
+    kMotionNullVertices = 1 << 1,   // its vertexData NULL
+    kMotionBadSType = 1 << 2,       // its sType wrong (an unknown structure in the triangles' pNext)
+    kMotionNearVertices = 1 << 3,   // with kNiceData: time-1 vertices near the time-0 ones (else payload / nice floats)
+};
+// Instances of a motion build (VkAccelerationStructureMotionInstanceNV, 160-byte stride, or typed pointers):
+enum : uint8_t {
+    kMotionRawType = 1 << 0,        // instance types are raw payload (array: a u32; pointers: the low 4 bits), so
+                                    // invalid types occur; else a payload byte % 3
+    kMotionFlags = 1 << 1,          // array mode: the motion instance's flags word is raw payload (else 0)
+    kMotionNonFinite = 1 << 2,      // one transform float of each instance NaN, +inf or -inf (after kNiceData)
+    kMotionOneType = 1 << 3,        // every instance of type (motion >> 4) % 3 (0 static, 1 matrix, 2 SRT)
+};
+
 #pragma pack(push, 1)
 struct GeomSpec {              // 24 bytes
     uint8_t format;            // vertex format: a table of the 16 supported formats and 4 unsupported ones
@@ -36,7 +52,8 @@ struct GeomSpec {              // 24 bytes
     uint8_t instances;         // bit 0 arrayOfPointers
     int8_t maxCountDelta;      // with BuildSpec::dstSize mode 3: pMaxPrimitiveCounts = count + delta
     uint16_t indexSpan;        // spheres / LSS indices address 1 + indexSpan % 256 vertices
-    uint8_t pad[4];
+    uint8_t motion;            // [NV-motion] kMotion* bits below (triangles and instances)
+    uint8_t pad[3];
 };
 struct BuildSpec {             // 16 + 3 * 24 = 88 bytes
     uint8_t kind;              // % 5: triangles, AABBs, instances (top level), spheres, LSS
@@ -52,7 +69,12 @@ struct BuildSpec {             // 16 + 3 * 24 = 88 bytes
                                // 4 vertex format, 5 transform presence, 6 geometry flags, 7 index type
     uint8_t misc;              // bit 0 bad info sType, 1 NULL range pointer, 2 both geometry pointers, 3 neither,
                                // 4 infoCount 0, 5 garbage src handle, 6 garbage dst handle
-    uint8_t pad[7];
+    uint8_t motion;            // [NV-motion] bit 0 a motion build (VK_BUILD_ACCELERATION_STRUCTURE_MOTION_BIT_NV, the
+                               // structures created with VK_ACCELERATION_STRUCTURE_CREATE_MOTION_BIT_NV and, top
+                               // level, a VkAccelerationStructureMotionInfoNV), bit 1 the destination's create flag
+                               // the other way (VUID 04927 / 04928), bit 2 VkAccelerationStructureMotionInfoNV::
+                               // maxInstances 0 (only a hint)
+    uint8_t pad[6];
     GeomSpec g[3];
 };
 #pragma pack(pop)

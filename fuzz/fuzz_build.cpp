@@ -63,8 +63,13 @@ public:
             std::memset(out, 0x3F, n);
             return;
         }
-        for (size_t i = 0; i < n; ++i) out[i] = data_[(pos_ + i) % size_];
-        pos_ = (pos_ + n) % size_;
+        // out[i] = data_[(pos_ + i) % size_], copied in runs (a byte loop costs much under coverage instrumentation).
+        for (size_t done = 0; done < n;) {
+            const size_t run = std::min(n - done, size_ - pos_);
+            std::memcpy(out + done, data_ + pos_, run);
+            done += run;
+            pos_ = (pos_ + run) % size_;
+        }
     }
     uint8_t byte() {
         uint8_t b;
@@ -99,6 +104,8 @@ struct Geometry {
     VkAccelerationStructureGeometrySpheresDataNV spheres{VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_GEOMETRY_SPHERES_DATA_NV};
     VkAccelerationStructureGeometryLinearSweptSpheresDataNV lss{
         VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_GEOMETRY_LINEAR_SWEPT_SPHERES_DATA_NV};
+    VkAccelerationStructureGeometryMotionTrianglesDataNV motionTriangles{
+        VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_GEOMETRY_MOTION_TRIANGLES_DATA_NV};
     VkAccelerationStructureBuildRangeInfoKHR range{};
     uint32_t maxCount = 0;
     std::deque<Region> regions;  // the inputs (a deque: references stay valid as regions are added)
@@ -110,9 +117,10 @@ struct Geometry {
     Geometry(const Geometry&) = delete;
 };
 
-// What an instance reference in fuzzed data becomes (values below 16 are tokens).
-uint64_t instanceReference(Device& d, uint64_t v, bool nice, const Region& pool) {
-    if (nice) v = 1 + v % 4;
+// What an instance reference in fuzzed data becomes (values below 16 are tokens). `nice` picks a real bottom level
+// (in a motion build the motion-triangle one too).
+uint64_t instanceReference(Device& d, uint64_t v, bool nice, const Region& pool, bool motion = false) {
+    if (nice) v = motion ? (v % 5 == 4 ? 11 : 1 + v % 5) : 1 + v % 4;
     switch (v) {
         case 0: return 0;
         case 1: return uint64_t(d.blasTriangles.handle);
@@ -125,13 +133,110 @@ uint64_t instanceReference(Device& d, uint64_t v, bool nice, const Region& pool)
         case 8: return uint64_t(fz::plainDevice().blasTriangles.handle);
         case 9: return d.address(d.blasTriangles);
         case 10: return reinterpret_cast<uint64_t>(pool.data);  // harness memory that is no structure
+        case 11: return uint64_t(d.blasMotion.handle);
+        case 12: return uint64_t(d.tlasMotion.handle);
         default: return v;
     }
 }
 
+// ---- [NV-motion] motion instances ---------------------------------------------------------------------------------
+// The structure a motion instance's type names (VkAccelerationStructureInstanceKHR, ...MatrixMotionInstanceNV,
+// ...SRTMotionInstanceNV): its size, the number of transform floats at its start, and the offset of its
+// customIndex|mask word (then sbtOffset|flags, then the reference). An invalid type reads nothing (validation reports
+// it first); the harness gives it the largest size.
+struct MotionMember {
+    uint32_t size, floats, words;
+};
+MotionMember motionMember(uint32_t type) {
+    switch (type) {
+        case 0: return {64, 12, 48};
+        case 1: return {112, 24, 96};
+        default: return {144, 32, 128};
+    }
+}
+
+// Fills the member structure of a motion instance of `type` (<= 2): nice transforms and mask when `nice`, one
+// non-finite transform float when `nonFinite`, the reference a token (instanceReference).
+void finishMotionInstance(Device& d, uint32_t type, uint8_t* body, bool nice, bool nonFinite, const Region& pool,
+                          fz::Rng& rng) {
+    const MotionMember m = motionMember(type);
+    if (nice) {
+        float f[32] = {};
+        if (type == 0 || type == 1) {
+            for (int t = 0; t < int(type) + 1; ++t) {
+                float* x = f + 12 * t;
+                for (int i = 0; i < 12; ++i) x[i] = (i % 5 == 0) ? rng.uniform(0.5f, 2.0f) : rng.uniform(-0.3f, 0.3f);
+                x[3] = rng.uniform(-8, 8), x[7] = rng.uniform(-8, 8), x[11] = rng.uniform(-8, 8);
+            }
+        } else {  // VkSRTDataNV: sx a b pvx sy c pvy sz pvz qx qy qz qw tx ty tz, at time 0 and 1
+            for (int t = 0; t < 2; ++t) {
+                float* x = f + 16 * t;
+                x[0] = rng.uniform(0.5f, 2.0f), x[4] = rng.uniform(0.5f, 2.0f), x[7] = rng.uniform(0.5f, 2.0f);
+                x[1] = rng.uniform(-0.3f, 0.3f), x[2] = rng.uniform(-0.3f, 0.3f), x[5] = rng.uniform(-0.3f, 0.3f);
+                x[3] = rng.uniform(-1, 1), x[6] = rng.uniform(-1, 1), x[8] = rng.uniform(-1, 1);
+                const bool zero = rng.next() % 16 == 0;  // a zero quaternion: the identity rotation
+                for (int k = 9; k < 13; ++k) x[k] = zero ? 0.0f : rng.uniform(-1, 1);
+                x[13] = rng.uniform(-8, 8), x[14] = rng.uniform(-8, 8), x[15] = rng.uniform(-8, 8);
+            }
+        }
+        std::memcpy(body, f, 4 * m.floats);
+        body[m.words + 3] = 0xFF;   // mask
+        body[m.words + 7] &= 0x0F;  // flags: the four VkGeometryInstanceFlagBitsKHR of the core extension
+    }
+    if (nonFinite) {
+        const float values[3] = {NAN, INFINITY, -INFINITY};
+        storeFloat(body + 4 * (rng.next() % m.floats), values[rng.next() % 3]);
+    }
+    storeU64(body + m.words + 8, instanceReference(d, loadU64(body + m.words + 8), nice, pool, true));
+}
+
+// The instances of a motion build: VkAccelerationStructureMotionInstanceNV records at a 160-byte stride, or typed
+// pointers (the low 4 bits the type) to structures of the size their type names, each its own allocation.
+void makeMotionInstances(Device& d, const GeomSpec& gs, uint32_t count, uint32_t primitiveOffset, Payload& payload,
+                         fz::Rng& rng, Geometry& out) {
+    const bool nice = gs.fix & fz::kNiceData;
+    const bool nonFinite = gs.motion & fz::kMotionNonFinite;
+    auto& in = out.geometry.geometry.instances;
+    Region& pool = out.region(64);  // harness memory that is no structure (instance reference token 10)
+    auto typeOf = [&](uint32_t raw) -> uint32_t {
+        if (gs.motion & fz::kMotionOneType) return uint32_t(gs.motion >> 4) % 3;
+        return (gs.motion & fz::kMotionRawType) ? raw : raw % 3;
+    };
+    if (!in.arrayOfPointers) {
+        Region& arr = out.region(primitiveOffset + 160ull * count);
+        payload.fill(arr.data, arr.size);
+        for (uint32_t k = 0; k < count; ++k) {
+            uint8_t* rec = arr.data + primitiveOffset + 160ull * k;
+            uint32_t raw;
+            std::memcpy(&raw, rec, 4);
+            const uint32_t type = typeOf(raw);
+            std::memcpy(rec, &type, 4);
+            if (!(gs.motion & fz::kMotionFlags)) std::memset(rec + 4, 0, 4);
+            if (type <= 2) finishMotionInstance(d, type, rec + 8, nice, nonFinite, pool, rng);
+        }
+        in.data.hostAddress = (gs.fix & fz::kNullData) ? nullptr : arr.data;
+    } else {
+        Region& ptrs = out.region(primitiveOffset + 8ull * count);
+        payload.fill(ptrs.data, primitiveOffset);
+        for (uint32_t k = 0; k < count; ++k) {
+            const uint32_t type = typeOf(payload.byte()) & 15;
+            Region& body = out.region(motionMember(type).size);  // 16-byte aligned: the low 4 bits are free
+            payload.fill(body.data, body.size);
+            if (type <= 2) finishMotionInstance(d, type, body.data, nice, nonFinite, pool, rng);
+            const uintptr_t p = reinterpret_cast<uintptr_t>(body.data) | type;
+            std::memcpy(ptrs.data + primitiveOffset + 8ull * k, &p, sizeof p);
+        }
+        if ((gs.fix & fz::kFlipIndexPointer) && count) {  // a NULL pointer (with type bits)
+            const uintptr_t p = payload.byte() & 15;
+            std::memcpy(ptrs.data + primitiveOffset + 8ull * (gs.indexSpan % count), &p, sizeof p);
+        }
+        in.data.hostAddress = (gs.fix & fz::kNullData) ? nullptr : ptrs.data;
+    }
+}
+
 // Materializes geometry `gs` of type `kind` into `out`: every region sized for what the parameters can reach.
-void makeGeometry(Device& d, const GeomSpec& gs, uint32_t kind, uint8_t geometryFlags, Payload& payload,
-                  Geometry& out) {
+void makeGeometry(Device& d, const GeomSpec& gs, uint32_t kind, uint8_t geometryFlags, bool motionBuild,
+                  Payload& payload, Geometry& out) {
     fz::Rng rng(uint64_t(gs.count) * 0x9E37 + gs.stride + (uint64_t(payload.position()) << 20));
     const bool nice = gs.fix & fz::kNiceData;
     const FormatInfo& fmt = kFormats[gs.format % kFormatCount];
@@ -195,6 +300,27 @@ void makeGeometry(Device& d, const GeomSpec& gs, uint32_t kind, uint8_t geometry
         payload.fill(v.data, v.size);
         if (nice && fmt.float32) niceFloats(v, rng);
         t.vertexData.hostAddress = (gs.fix & fz::kNullData) ? nullptr : v.data;
+        if (gs.motion & fz::kMotionTriangles) {
+            // [NV-motion] Time-1 vertices: the same format, stride, indexing and size as the time-0 ones.
+            Region& v1 = out.region(v.size);
+            payload.fill(v1.data, v1.size);
+            if (nice && fmt.float32) {
+                if (gs.motion & fz::kMotionNearVertices) {
+                    std::memcpy(v1.data, v.data, v.size);
+                    for (size_t i = 0; i + 4 <= v1.size; i += 4) {
+                        float f;
+                        std::memcpy(&f, v1.data + i, 4);
+                        storeFloat(v1.data + i, f + rng.uniform(-0.5f, 0.5f));
+                    }
+                } else {
+                    niceFloats(v1, rng);
+                }
+            }
+            auto& m = out.motionTriangles;
+            if (gs.motion & fz::kMotionBadSType) m.sType = VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_MOTION_INFO_NV;
+            m.vertexData.hostAddress = (gs.motion & fz::kMotionNullVertices) ? nullptr : v1.data;
+            t.pNext = &m;
+        }
         if (gs.transform) {
             uint32_t offset = gs.transform - 1u;
             if (gs.fix & fz::kAlign) offset &= ~15u;
@@ -238,6 +364,12 @@ void makeGeometry(Device& d, const GeomSpec& gs, uint32_t kind, uint8_t geometry
         in.sType = (gs.fix & fz::kBadSType) ? VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_GEOMETRY_AABBS_DATA_KHR
                                             : VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_GEOMETRY_INSTANCES_DATA_KHR;
         in.arrayOfPointers = (gs.instances & 1) ? VK_TRUE : VK_FALSE;
+        r.primitiveCount = count;
+        if (motionBuild) {
+            makeMotionInstances(d, gs, count, primitiveOffset, payload, rng, out);
+            out.maxCount = count;
+            return;
+        }
         Region pool(std::max<size_t>(64 * size_t(count), 64));
         payload.fill(pool.data, pool.size);
         for (uint32_t k = 0; k < count; ++k) {
@@ -385,7 +517,7 @@ void makeSet(Device& d, const BuildSpec& spec, uint32_t kind, uint32_t geometryC
     set.count = geometryCount;
     for (uint32_t i = 0; i < geometryCount; ++i) {
         const uint32_t k = (i == 1 && (spec.geometryCount & 0x40)) ? (kind + 1) % 5 : kind;
-        makeGeometry(d, spec.g[i], k, spec.g[i].flags, payload, set.g[i]);
+        makeGeometry(d, spec.g[i], k, spec.g[i].flags, spec.motion & 1, payload, set.g[i]);
         set.plain[i] = set.g[i].geometry;  // pNext still points into set.g[i], which never moves
         set.pointers[i] = &set.g[i].geometry;
         set.ranges[i] = set.g[i].range;
@@ -472,7 +604,11 @@ void exercise(Device& d, Structure& s, VkAccelerationStructureTypeKHR type, cons
     if (type == VK_ACCELERATION_STRUCTURE_TYPE_TOP_LEVEL_KHR) {
         fz::traceProbe(d, s.handle, bounds, seed, seedSize);
     } else {
-        Structure top = d.buildSingleInstanceTlas(s, seedSize ? seed[0] : 0);
+        // A bottom level built with motion goes into a motion top level (an instance type the seed chooses); others
+        // now and then too.
+        const uint8_t pick = seedSize > 1 ? seed[1] : 0;
+        const int motionType = (fz::builtWithMotion(s.block()) || (pick & 4)) ? int(pick % 3) : -1;
+        Structure top = d.buildSingleInstanceTlas(s, seedSize ? seed[0] : 0, motionType);
         fz::traceProbe(d, top.handle, bounds, seed, seedSize);
         d.destroyStructure(top);
     }
@@ -498,8 +634,16 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
                                               : VK_ACCELERATION_STRUCTURE_TYPE_BOTTOM_LEVEL_KHR;
     const VkAccelerationStructureTypeKHR otherType = top ? VK_ACCELERATION_STRUCTURE_TYPE_BOTTOM_LEVEL_KHR
                                                          : VK_ACCELERATION_STRUCTURE_TYPE_TOP_LEVEL_KHR;
-    const VkBuildAccelerationStructureFlagsKHR flags = buildFlags(spec.buildFlags);
+    const bool motion = spec.motion & 1;
+    const VkBuildAccelerationStructureFlagsKHR flags =
+        buildFlags(spec.buildFlags) | (motion ? VK_BUILD_ACCELERATION_STRUCTURE_MOTION_BIT_NV : 0);
     const VkDeviceSize asOffset = (spec.asOffset & 1) ? 256 : 0;
+    // [NV-motion] The structures of a motion build are created with CREATE_MOTION (the destination, with bit 1, the
+    // other way); a top level's VkAccelerationStructureMotionInfoNV::maxInstances is a hint (bit 2: 0).
+    const VkAccelerationStructureCreateFlagsKHR srcCreate = motion ? VK_ACCELERATION_STRUCTURE_CREATE_MOTION_BIT_NV : 0;
+    const VkAccelerationStructureCreateFlagsKHR dstCreate =
+        (spec.motion & 2) ? (srcCreate ^ VK_ACCELERATION_STRUCTURE_CREATE_MOTION_BIT_NV) : srcCreate;
+    const uint32_t maxInstances = (spec.motion & 4) ? 0 : 64;
 
     GeometrySet set;
     makeSet(d, spec, kind, geometryCount, (spec.dstSize & 3) == 3, payload, set);
@@ -546,7 +690,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     // The source of an update: a build of the same inputs with ALLOW_UPDATE (which validation may refuse).
     Structure src;
     if (update) {
-        src = d.createStructure(type, std::max<VkDeviceSize>(sizes.accelerationStructureSize, 256), asOffset);
+        src = d.createStructure(type, std::max<VkDeviceSize>(sizes.accelerationStructureSize, 256), asOffset, 0,
+                                srcCreate, maxInstances);
         VkAccelerationStructureBuildGeometryInfoKHR pre = info;
         pre.flags |= VK_BUILD_ACCELERATION_STRUCTURE_ALLOW_UPDATE_BIT_KHR;
         pre.dstAccelerationStructure = src.handle;
@@ -592,7 +737,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
             dst[i] = src;
         } else {
             dst[i] = d.createStructure(wrongType ? otherType : type, dstSize, asOffset,
-                                       overlap ? asOffset + scratchOffset + scratchSize : 0);
+                                       overlap ? asOffset + scratchOffset + scratchSize : 0, dstCreate, maxInstances);
         }
         infos[i] = info;
         infos[i].flags = flags;
@@ -628,6 +773,9 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
 
     uint64_t reported = 0;
     const VkResult r = submit(d, deferred, infoCount, infos, rangePointers, reported);
+    if (std::getenv("VKAS_FUZZ_VERBOSE"))
+        std::fprintf(stderr, "vkas fuzz: the build returned %d after %llu validation message(s)%s\n", int(r),
+                     (unsigned long long)reported, motion ? " (a motion build)" : "");
     for (size_t i = firstInput; i < watched.size(); ++i)
         FZ_CHECK(unchanged(watched[i]), "the build wrote into its %s", watched[i].what);
     if (reported != 0) {

@@ -87,6 +87,19 @@ Device::Device(bool validation_) : validation(validation_) {
         t.indexData.hostAddress = idx.data();
         blasTriangles = buildSimple(VK_ACCELERATION_STRUCTURE_TYPE_BOTTOM_LEVEL_KHR, g, uint32_t(idx.size() / 3),
                                     VK_BUILD_ACCELERATION_STRUCTURE_ALLOW_DATA_ACCESS_KHR);
+        // [NV-motion] The same grid as motion triangles: at time 1 each vertex moves by (0.1 y, -0.2 x, 0.5).
+        std::vector<float> v1(v);
+        for (size_t k = 0; k < v1.size(); k += 3) {
+            const float x = v1[k], y = v1[k + 1];
+            v1[k] += 0.1f * y, v1[k + 1] -= 0.2f * x, v1[k + 2] += 0.5f;
+        }
+        VkAccelerationStructureGeometryMotionTrianglesDataNV m{
+            VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_GEOMETRY_MOTION_TRIANGLES_DATA_NV};
+        m.vertexData.hostAddress = v1.data();
+        t.pNext = &m;
+        blasMotion = buildSimple(VK_ACCELERATION_STRUCTURE_TYPE_BOTTOM_LEVEL_KHR, g, uint32_t(idx.size() / 3),
+                                 VK_BUILD_ACCELERATION_STRUCTURE_MOTION_BIT_NV |
+                                     VK_BUILD_ACCELERATION_STRUCTURE_ALLOW_UPDATE_BIT_KHR);
     }
     {
         const VkAabbPositionsKHR boxes[4] = {{-1, -1, -1, 0, 0, 0}, {0, 0, 0, 1, 1, 1}, {-1, 0, -1, 0, 1, 0},
@@ -152,6 +165,52 @@ Device::Device(bool validation_) : validation(validation_) {
         g.geometry.instances.data.hostAddress = inst;
         tlas = buildSimple(VK_ACCELERATION_STRUCTURE_TYPE_TOP_LEVEL_KHR, g, 5);
     }
+    {
+        // [NV-motion] A motion top level: one instance of each type and of each bottom level, one inactive.
+        VkAccelerationStructureMotionInstanceNV inst[6];
+        std::memset(inst, 0, sizeof inst);
+        const Structure* b[6] = {&blasTriangles, &blasMotion, &blasAabbs, &blasSpheres, &blasLss, nullptr};
+        for (int i = 0; i < 6; ++i) {
+            const uint32_t type = uint32_t(i % 3);
+            inst[i].type = VkAccelerationStructureMotionInstanceTypeNV(type);
+            const uint64_t ref = b[i] ? uint64_t(b[i]->handle) : 0;
+            const float tx = float(i % 3) * 3.0f, ty = float(i / 3) * 3.0f;
+            if (type == 0) {
+                auto& s = inst[i].data.staticInstance;
+                s.transform.matrix[0][0] = s.transform.matrix[1][1] = s.transform.matrix[2][2] = 1;
+                s.transform.matrix[0][3] = tx, s.transform.matrix[1][3] = ty;
+                s.instanceCustomIndex = uint32_t(20 + i), s.mask = 0xFF, s.accelerationStructureReference = ref;
+            } else if (type == 1) {
+                auto& mm = inst[i].data.matrixMotionInstance;
+                for (auto* t : {&mm.transformT0, &mm.transformT1}) {
+                    t->matrix[0][0] = t->matrix[1][1] = t->matrix[2][2] = 1;
+                    t->matrix[0][3] = tx, t->matrix[1][3] = ty;
+                }
+                mm.transformT1.matrix[2][3] = 1.5f;
+                mm.transformT1.matrix[0][1] = 0.25f;
+                mm.instanceCustomIndex = uint32_t(20 + i), mm.mask = 0xFF, mm.accelerationStructureReference = ref;
+                mm.flags = VK_GEOMETRY_INSTANCE_TRIANGLE_FACING_CULL_DISABLE_BIT_KHR;
+            } else {
+                auto& sm = inst[i].data.srtMotionInstance;
+                for (auto* t : {&sm.transformT0, &sm.transformT1}) {
+                    t->sx = t->sy = t->sz = 1;
+                    t->qw = 1;
+                    t->tx = tx, t->ty = ty;
+                }
+                sm.transformT1.qz = 0.7071068f, sm.transformT1.qw = 0.7071068f;  // 90 degrees about z at time 1
+                sm.transformT1.sx = 1.5f, sm.transformT1.a = 0.2f, sm.transformT1.pvx = 0.5f;
+                sm.instanceCustomIndex = uint32_t(20 + i), sm.mask = 0xFF, sm.accelerationStructureReference = ref;
+            }
+        }
+        Region arr(160 * 6);
+        for (int i = 0; i < 6; ++i) std::memcpy(arr.data + 160 * i, &inst[i], sizeof inst[i]);
+        VkAccelerationStructureGeometryKHR g{VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_GEOMETRY_KHR};
+        g.geometryType = VK_GEOMETRY_TYPE_INSTANCES_KHR;
+        g.geometry.instances.sType = VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_GEOMETRY_INSTANCES_DATA_KHR;
+        g.geometry.instances.data.hostAddress = arr.data;
+        tlasMotion = buildSimple(VK_ACCELERATION_STRUCTURE_TYPE_TOP_LEVEL_KHR, g, 6,
+                                 VK_BUILD_ACCELERATION_STRUCTURE_MOTION_BIT_NV);
+    }
     unbuilt = createStructure(VK_ACCELERATION_STRUCTURE_TYPE_BOTTOM_LEVEL_KHR, 4096);
     Structure dead = createStructure(VK_ACCELERATION_STRUCTURE_TYPE_BOTTOM_LEVEL_KHR, 256);
     deadHandle = uint64_t(dead.handle);
@@ -161,7 +220,8 @@ Device::Device(bool validation_) : validation(validation_) {
 }
 
 Device::~Device() {
-    for (Structure* s : {&blasTriangles, &blasAabbs, &blasSpheres, &blasLss, &tlas, &unbuilt}) destroyStructure(*s);
+    for (Structure* s : {&blasTriangles, &blasAabbs, &blasSpheres, &blasLss, &tlas, &blasMotion, &tlasMotion, &unbuilt})
+        destroyStructure(*s);
     vkasDestroyDevice(device);
 }
 
@@ -196,7 +256,8 @@ void Device::destroyBuffer(Buffer& b) {
 }
 
 Structure Device::createStructure(VkAccelerationStructureTypeKHR type, VkDeviceSize size, VkDeviceSize offset,
-                                  VkDeviceSize bufferSize) {
+                                  VkDeviceSize bufferSize, VkAccelerationStructureCreateFlagsKHR createFlags,
+                                  uint32_t motionMaxInstances) {
     Structure s;
     s.offset = offset;
     s.size = size;
@@ -206,6 +267,11 @@ Structure Device::createStructure(VkAccelerationStructureTypeKHR type, VkDeviceS
     ci.offset = offset;
     ci.size = size;
     ci.type = type;
+    ci.createFlags = createFlags;
+    VkAccelerationStructureMotionInfoNV motionInfo{VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_MOTION_INFO_NV};
+    motionInfo.maxInstances = motionMaxInstances;
+    if ((createFlags & VK_ACCELERATION_STRUCTURE_CREATE_MOTION_BIT_NV) && type != VK_ACCELERATION_STRUCTURE_TYPE_BOTTOM_LEVEL_KHR)
+        ci.pNext = &motionInfo;
     FZ_CHECK(vkCreateAccelerationStructureKHR(device, &ci, nullptr, &s.handle) == VK_SUCCESS,
              "vkCreateAccelerationStructureKHR");
     return s;
@@ -242,7 +308,9 @@ Structure Device::buildSimple(VkAccelerationStructureTypeKHR type, const VkAccel
     VkAccelerationStructureBuildSizesInfoKHR sizes{VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_BUILD_SIZES_INFO_KHR};
     vkGetAccelerationStructureBuildSizesKHR(device, VK_ACCELERATION_STRUCTURE_BUILD_TYPE_HOST_KHR, &info,
                                             &primitiveCount, &sizes);
-    Structure s = createStructure(type, (sizes.accelerationStructureSize + 255) / 256 * 256);
+    const bool motion = (flags & VK_BUILD_ACCELERATION_STRUCTURE_MOTION_BIT_NV) != 0;
+    Structure s = createStructure(type, (sizes.accelerationStructureSize + 255) / 256 * 256, 0, 0,
+                                  motion ? VK_ACCELERATION_STRUCTURE_CREATE_MOTION_BIT_NV : 0, primitiveCount);
     Region scratch(sizes.buildScratchSize);
     info.dstAccelerationStructure = s.handle;
     info.scratchData.hostAddress = scratch.data;
@@ -254,7 +322,7 @@ Structure Device::buildSimple(VkAccelerationStructureTypeKHR type, const VkAccel
     return s;
 }
 
-Structure Device::buildSingleInstanceTlas(const Structure& blas, uint32_t instanceFlags) {
+Structure Device::buildSingleInstanceTlas(const Structure& blas, uint32_t instanceFlags, int motionType) {
     VkAccelerationStructureInstanceKHR inst{};
     inst.transform.matrix[0][0] = inst.transform.matrix[1][1] = inst.transform.matrix[2][2] = 1;
     inst.mask = 0xFF;
@@ -264,7 +332,26 @@ Structure Device::buildSingleInstanceTlas(const Structure& blas, uint32_t instan
     g.geometryType = VK_GEOMETRY_TYPE_INSTANCES_KHR;
     g.geometry.instances.sType = VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_GEOMETRY_INSTANCES_DATA_KHR;
     g.geometry.instances.data.hostAddress = &inst;
-    return buildSimple(VK_ACCELERATION_STRUCTURE_TYPE_TOP_LEVEL_KHR, g, 1);
+    if (motionType < 0) return buildSimple(VK_ACCELERATION_STRUCTURE_TYPE_TOP_LEVEL_KHR, g, 1);
+    // [NV-motion] One motion instance: the identity at time 0, moved (and for SRT rotated) at time 1.
+    VkAccelerationStructureMotionInstanceNV mi;
+    std::memset(&mi, 0, sizeof mi);
+    mi.type = VkAccelerationStructureMotionInstanceTypeNV(motionType % 3);
+    if (mi.type == VK_ACCELERATION_STRUCTURE_MOTION_INSTANCE_TYPE_STATIC_NV) {
+        mi.data.staticInstance = inst;
+    } else if (mi.type == VK_ACCELERATION_STRUCTURE_MOTION_INSTANCE_TYPE_MATRIX_MOTION_NV) {
+        auto& m = mi.data.matrixMotionInstance;
+        m.transformT0 = m.transformT1 = inst.transform;
+        m.transformT1.matrix[0][3] = 0.5f, m.transformT1.matrix[1][0] = 0.1f;
+        m.mask = 0xFF, m.flags = inst.flags, m.accelerationStructureReference = inst.accelerationStructureReference;
+    } else {
+        auto& s = mi.data.srtMotionInstance;
+        for (auto* t : {&s.transformT0, &s.transformT1}) t->sx = t->sy = t->sz = 1, t->qw = 1;
+        s.transformT1.qx = 0.5f, s.transformT1.qw = 0.8660254f, s.transformT1.ty = 0.5f;
+        s.mask = 0xFF, s.flags = inst.flags, s.accelerationStructureReference = inst.accelerationStructureReference;
+    }
+    g.geometry.instances.data.hostAddress = &mi;
+    return buildSimple(VK_ACCELERATION_STRUCTURE_TYPE_TOP_LEVEL_KHR, g, 1, VK_BUILD_ACCELERATION_STRUCTURE_MOTION_BIT_NV);
 }
 
 Device& validatingDevice() {
@@ -290,9 +377,12 @@ VkBool32 VKAPI_PTR intersectAtEntry(void*, const VkasAabbCandidate* c, float* tH
     return (c->primitiveIndex & 1) == 0 ? VK_TRUE : VK_FALSE;
 }
 
-void runQuery(VkAccelerationStructureKHR topLevel, uint32_t flags, const VkasRay& r, uint32_t variant) {
+// time: NULL for vkasRayQueryInitialize, else vkasRayQueryInitializeMotion at *time.
+void runQuery(VkAccelerationStructureKHR topLevel, uint32_t flags, const VkasRay& r, uint32_t variant,
+              const float* time = nullptr) {
     alignas(16) static thread_local VkasRayQuery q;
-    vkasRayQueryInitialize(&q, topLevel, flags, 0xFF, r.origin, r.tMin, r.direction, r.tMax);
+    if (time) vkasRayQueryInitializeMotion(&q, topLevel, flags, 0xFF, r.origin, r.tMin, r.direction, r.tMax, *time);
+    else vkasRayQueryInitialize(&q, topLevel, flags, 0xFF, r.origin, r.tMin, r.direction, r.tMax);
     uint64_t stops = 0;
     float tmp[4][4];
     while (vkasRayQueryProceed(&q)) {
@@ -389,6 +479,11 @@ void traceProbe(Device& device, VkAccelerationStructureKHR topLevel, const float
     const uint32_t flagSets[] = {0, VKAS_RAY_FLAG_OPAQUE, extraFlags};
     for (uint32_t f = 0; f < 3; ++f)
         for (size_t i = 0; i < rays.size(); ++i) runQuery(topLevel, flagSets[f], rays[i], uint32_t(i + f));
+    // [NV-motion] Each ray once more at one of three ray times (a time outside [0, 1], NaN included, is reported and
+    // traces nothing).
+    const float times[3] = {0.25f, 1.0f, seedSize >= 6 ? loadFloat(seed + 2) : 0.75f};
+    for (size_t i = 0; i < rays.size(); ++i)
+        runQuery(topLevel, i % 3 == 2 ? extraFlags : 0, rays[i], uint32_t(i), &times[i % 3]);
     std::vector<VkasHit> hits(rays.size());
     const uint32_t n = uint32_t(rays.size());
     for (VkasTraceMode mode : {VKAS_TRACE_MODE_CLOSEST_HIT, VKAS_TRACE_MODE_ANY_HIT}) {

@@ -94,9 +94,11 @@ public:
     Buffer createBuffer(VkDeviceSize size, uint8_t poison = 0xAA);
     void destroyBuffer(Buffer& b);
     // A structure of `size` bytes at `offset` (a multiple of 256) of a new buffer of at least offset + size + 256
-    // bytes (bufferSize when larger), poisoned with 0xAA.
+    // bytes (bufferSize when larger), poisoned with 0xAA. createFlags with VK_ACCELERATION_STRUCTURE_CREATE_MOTION_BIT_NV
+    // chain a VkAccelerationStructureMotionInfoNV (maxInstances: motionMaxInstances) for every type but BOTTOM_LEVEL.
     Structure createStructure(VkAccelerationStructureTypeKHR type, VkDeviceSize size, VkDeviceSize offset = 0,
-                              VkDeviceSize bufferSize = 0);
+                              VkDeviceSize bufferSize = 0, VkAccelerationStructureCreateFlagsKHR createFlags = 0,
+                              uint32_t motionMaxInstances = 64);
     void destroyStructure(Structure& s);
     uint64_t address(const Structure& s);
     // The SIZE query of a constructed structure (usedSize).
@@ -104,14 +106,19 @@ public:
 
     // Real structures built at start-up (valid builds of each kind), that fuzzed data may reference.
     Structure blasTriangles, blasAabbs, blasSpheres, blasLss, tlas;
+    // [NV-motion] Motion structures: motion triangles, and a motion top level of static, matrix and SRT instances
+    // (of blasTriangles, blasMotion, blasAabbs, blasSpheres, blasLss, and an inactive one).
+    Structure blasMotion, tlasMotion;
     Structure unbuilt;  // created, never built
     uint64_t deadHandle = 0;  // a structure handle that was destroyed
 
-    // Builds one geometry into a new structure (valid input; fails the process otherwise).
+    // Builds one geometry into a new structure (valid input; fails the process otherwise). flags with
+    // VK_BUILD_ACCELERATION_STRUCTURE_MOTION_BIT_NV create the structure with VK_ACCELERATION_STRUCTURE_CREATE_MOTION_BIT_NV.
     Structure buildSimple(VkAccelerationStructureTypeKHR type, const VkAccelerationStructureGeometryKHR& geometry,
                           uint32_t primitiveCount, VkBuildAccelerationStructureFlagsKHR flags = 0);
-    // A top level of one identity instance of `blas` (flags: instance flags).
-    Structure buildSingleInstanceTlas(const Structure& blas, uint32_t instanceFlags = 0);
+    // A top level of one identity instance of `blas` (flags: instance flags). motionType 0, 1 or 2: a motion top level
+    // of one VkAccelerationStructureMotionInstanceNV of that type (static, matrix motion, SRT motion) instead.
+    Structure buildSingleInstanceTlas(const Structure& blas, uint32_t instanceFlags = 0, int motionType = -1);
 
 private:
     static VKAPI_ATTR VkBool32 VKAPI_CALL messenger(VkDebugUtilsMessageSeverityFlagBitsEXT,
@@ -126,8 +133,9 @@ Device& validatingDevice();
 Device& plainDevice();
 
 // Runs a few rays through `topLevel` (a top-level structure of `device`): ray queries that call every getter and
-// confirm or generate every candidate, vkasTraceRays and vkasTraceRaysProcedural. `seed` bytes choose extra rays
-// and ray flags. `bounds` (lower xyz, upper xyz), when finite, aims rays at the scene.
+// confirm or generate every candidate (some through vkasRayQueryInitializeMotion at times 0.25, 1 and one from the
+// seed, which may be outside [0, 1]), vkasTraceRays and vkasTraceRaysProcedural. `seed` bytes choose extra rays and
+// ray flags. `bounds` (lower xyz, upper xyz), when finite, aims rays at the scene.
 void traceProbe(Device& device, VkAccelerationStructureKHR topLevel, const float bounds[6], const uint8_t* seed,
                 size_t seedSize);
 
@@ -145,5 +153,12 @@ struct Rng {
 };
 
 uint64_t hashBytes(const uint8_t* data, size_t size);
+
+// The header's buildFlags (docs/FORMAT.md) has VK_BUILD_ACCELERATION_STRUCTURE_MOTION_BIT_NV.
+inline bool builtWithMotion(const uint8_t* block) {
+    uint32_t flags;
+    std::memcpy(&flags, block + 12, 4);
+    return (flags & VK_BUILD_ACCELERATION_STRUCTURE_MOTION_BIT_NV) != 0;
+}
 
 }  // namespace fz

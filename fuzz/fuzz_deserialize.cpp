@@ -4,10 +4,11 @@
 // must either load them or reject them with an error, writing nothing, reading nothing outside the blob. What it
 // accepts is traced (ray queries, batch traces), cloned, serialized again and loaded again (byte-identical).
 //
-// Handle-array entries 1 to 11 are tokens the harness replaces by structures of the device (fuzz_common.hpp builds
+// Handle-array entries 1 to 13 are tokens the harness replaces by structures of the device (fuzz_common.hpp builds
 // them): 1 a triangle bottom level, 2 its device address, 3 AABBs, 4 spheres, 5 LSS, 6 a top level, 7 the
 // destination itself, 8 a structure never built, 9 a destroyed handle, 10 a structure of the other device, 11 the
-// AABB structure's address. Other values stay as they are (garbage, to be rejected or made inactive).
+// AABB structure's address, 12 a motion-triangle bottom level, 13 a motion top level. Other values stay as they are
+// (garbage, to be rejected or made inactive).
 #include <algorithm>
 #include <cstring>
 
@@ -19,7 +20,9 @@ using fz::Device;
 using fz::Region;
 using fz::Structure;
 
-constexpr uint64_t kMaxExtent = 1u << 20;  // the largest blob (and destination) the harness allocates
+// The largest blob the harness allocates (scripts/run-fuzzers.sh gives inputs of at most 16 KiB; a larger claimed
+// serialized size is replaced by the input size).
+constexpr uint64_t kMaxExtent = 1u << 16;
 constexpr uint8_t kDriverUuid[16] = {'V', 'K', 'A', 'S', '-', 'D', 'R', 'I', 'V', 'E', 'R', '-', 'F', 'M', 'T', '1'};
 constexpr uint8_t kCompatUuid[16] = {'V', 'K', 'A', 'S', '-', 'A', 'S', '-', 'F', 'O', 'R', 'M', 'A', 'T', '-', '1'};
 
@@ -35,10 +38,10 @@ uint32_t load32(const uint8_t* p) {
 }
 void store64(uint8_t* p, uint64_t v) { std::memcpy(p, &v, 8); }
 
+// Whether the n bytes at p all equal `value`. memcmp of the range with itself shifted by one byte: no per-byte loop
+// (with coverage instrumentation a byte loop over a destination costs more than the whole load).
 bool allBytes(const uint8_t* p, size_t n, uint8_t value) {
-    for (size_t i = 0; i < n; ++i)
-        if (p[i] != value) return false;
-    return true;
+    return n == 0 || (p[0] == value && std::memcmp(p, p + 1, n - 1) == 0);
 }
 
 // The blob as the application hands it over: 16-byte aligned, readable up to its header's serialized size (the
@@ -68,6 +71,8 @@ uint64_t tokenValue(Device& d, Device& other, const Structure& dst, uint64_t tok
         case 9: return d.deadHandle;
         case 10: return uint64_t(other.blasTriangles.handle);
         case 11: return d.address(d.blasAabbs);
+        case 12: return uint64_t(d.blasMotion.handle);
+        case 13: return uint64_t(d.tlasMotion.handle);
         default: return token;
     }
 }
@@ -77,7 +82,7 @@ void replaceTokens(Device& d, Device& other, const Structure& dst, Region& blob)
     for (uint64_t k = 0; k < n && 56 + 8 * (k + 1) <= blob.size; ++k) {
         uint8_t* p = blob.data + 56 + 8 * k;
         const uint64_t v = load64(p);
-        if (v >= 1 && v <= 11) store64(p, tokenValue(d, other, dst, v));
+        if (v >= 1 && v <= 13) store64(p, tokenValue(d, other, dst, v));
     }
 }
 
@@ -117,7 +122,11 @@ void exercise(Device& d, Structure& dst, uint64_t deserializedSize, uint64_t ser
     if (type == 0) {
         fz::traceProbe(d, dst.handle, bounds, seed, seedSize);
     } else {
-        Structure top = d.buildSingleInstanceTlas(dst, seedSize ? seed[0] : 0);
+        // A bottom level built with motion goes into a motion top level (an instance type the seed chooses); others
+        // now and then too.
+        const uint8_t pick = seedSize > 1 ? seed[1] : 0;
+        const int motionType = (fz::builtWithMotion(block) || (pick & 4)) ? int(pick % 3) : -1;
+        Structure top = d.buildSingleInstanceTlas(dst, seedSize ? seed[0] : 0, motionType);
         fz::traceProbe(d, top.handle, bounds, seed, seedSize);
         d.destroyStructure(top);
     }
@@ -161,8 +170,12 @@ void exercise(Device& d, Structure& dst, uint64_t deserializedSize, uint64_t ser
 VkResult runOn(Device& d, Device& other, const uint8_t* data, size_t size, bool compatible) {
     Region blob = makeBlob(data, size);
     const uint64_t h = fz::hashBytes(data, size);
+    // The destination has the claimed deserialized size, but at most the blob's extent (rounded up, plus 256): a load
+    // copies its structure out of the blob, so a larger destination only costs time (most fuzzed claims are huge).
     const uint64_t claimedDeserialized = load64(blob.data + 40);
-    const uint64_t dstSize = std::clamp<uint64_t>((claimedDeserialized + 255) / 256 * 256, 256, kMaxExtent);
+    const uint64_t dstLimit = (blob.size + 255) / 256 * 256 + 256;
+    const uint64_t dstSize =
+        std::clamp<uint64_t>((std::min<uint64_t>(claimedDeserialized, kMaxExtent) + 255) / 256 * 256, 256, dstLimit);
     // The type the blob's block names (top level 0); now and then a GENERIC destination.
     uint32_t blockType = 1;
     const uint64_t n = load64(blob.data + 48);
@@ -187,6 +200,9 @@ VkResult runOn(Device& d, Device& other, const uint8_t* data, size_t size, bool 
     const uint64_t before = d.messages();
     const VkResult r = deserialize(d, dst, blob.data, (h & 3) == 1);
     const uint64_t reported = d.messages() - before;
+    if (std::getenv("VKAS_FUZZ_VERBOSE"))
+        std::fprintf(stderr, "vkas fuzz: the load (validation %s) returned %d after %llu validation message(s)\n",
+                     d.validation ? "on" : "off", int(r), (unsigned long long)reported);
     FZ_CHECK(std::memcmp(copy.data, blob.data, blob.size) == 0, "the load wrote into the serialized data");
     if (d.validation) {
         FZ_CHECK(r == VK_SUCCESS || r == VK_ERROR_VALIDATION_FAILED_EXT || r == VK_ERROR_INCOMPATIBLE_VERSION_KHR,

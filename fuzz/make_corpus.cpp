@@ -1,5 +1,6 @@
 // Writes the seed corpora of the fuzz targets: `vkas_fuzz_make_corpus <dir>` fills <dir>/deserialize (serialized
-// structures of every kind, handle arrays written as fuzz_deserialize's tokens) and <dir>/build (BuildSpec inputs
+// structures of every kind, motion ones included, and small ones of one primitive each, all written by the public
+// serialize command, handle arrays written as fuzz_deserialize's tokens) and <dir>/build (BuildSpec inputs
 // that decode to valid builds of every geometry type and mode). fuzz/corpus/ holds its output.
 #include <cstdio>
 #include <string>
@@ -39,11 +40,12 @@ void writeBlob(Device& d, const Structure& s, const std::string& path) {
     std::memcpy(&n, blob.data + 48, 8);
     const uint64_t tokens[][2] = {{uint64_t(d.blasTriangles.handle), 1}, {uint64_t(d.blasAabbs.handle), 3},
                                   {uint64_t(d.blasSpheres.handle), 4},   {uint64_t(d.blasLss.handle), 5},
-                                  {uint64_t(d.tlas.handle), 6}};
+                                  {uint64_t(d.tlas.handle), 6},          {uint64_t(d.blasMotion.handle), 12},
+                                  {uint64_t(d.tlasMotion.handle), 13}};
     for (uint64_t k = 0; k < n; ++k) {
         uint64_t v;
         std::memcpy(&v, blob.data + 56 + 8 * k, 8);
-        uint64_t token = v == 0 ? 0 : 12;  // 12: an unknown value
+        uint64_t token = v == 0 ? 0 : 14;  // 14: an unknown value
         for (const auto& t : tokens)
             if (t[0] == v) token = t[1];
         std::memcpy(blob.data + 56 + 8 * k, &token, 8);
@@ -115,6 +117,93 @@ int main(int argc, char** argv) {
         d.destroyStructure(mesh);
     }
 
+    // [NV-motion] The motion structures of the harness.
+    writeBlob(d, d.blasMotion, dir + "/deserialize/blas_motion_triangles.bin");
+    writeBlob(d, d.tlasMotion, dir + "/deserialize/tlas_motion.bin");
+    // Small blobs of every geometry type: one primitive (or instance) each.
+    {
+        const float tri[9] = {-1, -1, 0, 1, -1, 0.5f, 0, 1, 0.25f};
+        const float tri1[9] = {-1, -1, 1, 1, -0.5f, 0.5f, 0.5f, 1, 0};
+        VkAccelerationStructureGeometryKHR g{VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_GEOMETRY_KHR};
+        g.geometryType = VK_GEOMETRY_TYPE_TRIANGLES_KHR;
+        auto& t = g.geometry.triangles;
+        t.sType = VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_GEOMETRY_TRIANGLES_DATA_KHR;
+        t.vertexFormat = VK_FORMAT_R32G32B32_SFLOAT;
+        t.vertexData.hostAddress = tri;
+        t.vertexStride = 12;
+        t.maxVertex = 2;
+        t.indexType = VK_INDEX_TYPE_NONE_KHR;
+        Structure s1 = d.buildSimple(VK_ACCELERATION_STRUCTURE_TYPE_BOTTOM_LEVEL_KHR, g, 1);
+        writeBlob(d, s1, dir + "/deserialize/small_triangle.bin");
+        d.destroyStructure(s1);
+        VkAccelerationStructureGeometryMotionTrianglesDataNV m{
+            VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_GEOMETRY_MOTION_TRIANGLES_DATA_NV};
+        m.vertexData.hostAddress = tri1;
+        t.pNext = &m;
+        s1 = d.buildSimple(VK_ACCELERATION_STRUCTURE_TYPE_BOTTOM_LEVEL_KHR, g, 1,
+                           VK_BUILD_ACCELERATION_STRUCTURE_MOTION_BIT_NV);
+        writeBlob(d, s1, dir + "/deserialize/small_motion_triangle.bin");
+        d.destroyStructure(s1);
+    }
+    {
+        const VkAabbPositionsKHR box = {-0.5f, -0.5f, -0.5f, 0.5f, 0.25f, 0.75f};
+        VkAccelerationStructureGeometryKHR g{VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_GEOMETRY_KHR};
+        g.geometryType = VK_GEOMETRY_TYPE_AABBS_KHR;
+        g.geometry.aabbs.sType = VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_GEOMETRY_AABBS_DATA_KHR;
+        g.geometry.aabbs.data.hostAddress = &box;
+        g.geometry.aabbs.stride = sizeof box;
+        Structure s1 = d.buildSimple(VK_ACCELERATION_STRUCTURE_TYPE_BOTTOM_LEVEL_KHR, g, 1);
+        writeBlob(d, s1, dir + "/deserialize/small_aabb.bin");
+        d.destroyStructure(s1);
+    }
+    {
+        const float centers[2][3] = {{-0.5f, 0, 0}, {0.5f, 0.25f, 0}};
+        const float radii[2] = {0.3f, 0.2f};
+        VkAccelerationStructureGeometrySpheresDataNV sp{VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_GEOMETRY_SPHERES_DATA_NV};
+        sp.vertexFormat = VK_FORMAT_R32G32B32_SFLOAT;
+        sp.vertexData.hostAddress = centers;
+        sp.vertexStride = 12;
+        sp.radiusFormat = VK_FORMAT_R32_SFLOAT;
+        sp.radiusData.hostAddress = radii;
+        sp.radiusStride = 4;
+        sp.indexType = VK_INDEX_TYPE_NONE_KHR;
+        VkAccelerationStructureGeometryKHR g{VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_GEOMETRY_KHR};
+        g.pNext = &sp;
+        g.geometryType = VK_GEOMETRY_TYPE_SPHERES_NV;
+        Structure s1 = d.buildSimple(VK_ACCELERATION_STRUCTURE_TYPE_BOTTOM_LEVEL_KHR, g, 1);
+        writeBlob(d, s1, dir + "/deserialize/small_sphere.bin");
+        d.destroyStructure(s1);
+        VkAccelerationStructureGeometryLinearSweptSpheresDataNV l{
+            VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_GEOMETRY_LINEAR_SWEPT_SPHERES_DATA_NV};
+        l.vertexFormat = VK_FORMAT_R32G32B32_SFLOAT;
+        l.vertexData.hostAddress = centers;
+        l.vertexStride = 12;
+        l.radiusFormat = VK_FORMAT_R32_SFLOAT;
+        l.radiusData.hostAddress = radii;
+        l.radiusStride = 4;
+        l.indexType = VK_INDEX_TYPE_NONE_KHR;
+        l.indexingMode = VK_RAY_TRACING_LSS_INDEXING_MODE_LIST_NV;
+        l.endCapsMode = VK_RAY_TRACING_LSS_PRIMITIVE_END_CAPS_MODE_NONE_NV;
+        g.pNext = &l;
+        g.geometryType = VK_GEOMETRY_TYPE_LINEAR_SWEPT_SPHERES_NV;
+        s1 = d.buildSimple(VK_ACCELERATION_STRUCTURE_TYPE_BOTTOM_LEVEL_KHR, g, 1);
+        writeBlob(d, s1, dir + "/deserialize/small_lss.bin");
+        d.destroyStructure(s1);
+    }
+    {
+        // Top levels of one instance: static, and motion of each type (the references become tokens).
+        Structure s1 = d.buildSingleInstanceTlas(d.blasTriangles);
+        writeBlob(d, s1, dir + "/deserialize/small_tlas.bin");
+        d.destroyStructure(s1);
+        const char* motionNames[3] = {"static", "matrix", "srt"};
+        const Structure* refs[3] = {&d.blasAabbs, &d.blasMotion, &d.blasSpheres};
+        for (int type = 0; type < 3; ++type) {
+            s1 = d.buildSingleInstanceTlas(*refs[type], 0, type);
+            writeBlob(d, s1, dir + "/deserialize/small_tlas_motion_" + motionNames[type] + ".bin");
+            d.destroyStructure(s1);
+        }
+    }
+
     // Build inputs: valid builds of each geometry type, then modes.
     const char* names[5] = {"triangles", "aabbs", "instances", "spheres", "lss"};
     for (uint32_t kind = 0; kind < 5; ++kind)
@@ -148,5 +237,41 @@ int main(int argc, char** argv) {
     s.asOffset = 1;
     s.scratch = 5 << 2;
     writeSpec(dir + "/build/spheres_offsets.bin", s, 512, 15);
+
+    // [NV-motion] Motion builds: motion triangles (alone, updated, next to static triangles), motion instances of
+    // mixed and single types, in arrays and through typed pointers, and matrix motion with non-finite transforms
+    // (which validation does not check: the build must bound or drop them).
+    s = validSpec(0, 24);
+    s.motion = 1;
+    for (auto& g : s.g) g.motion = fz::kMotionTriangles | fz::kMotionNearVertices;
+    writeSpec(dir + "/build/motion_triangles.bin", s, 512, 16);
+    s.geometryCount = 2;
+    s.g[0].indexType = 0;
+    s.g[1].motion = 0;  // static triangles in a motion bottom level
+    s.g[1].format = 4;  // R16G16B16_SFLOAT
+    writeSpec(dir + "/build/motion_triangles_mixed.bin", s, 512, 17);
+    s = validSpec(0, 30);
+    s.motion = 1;
+    s.mode = 1;         // update
+    s.update = 2;       // new vertex data
+    s.g[0].indexType = 0;
+    s.g[0].motion = fz::kMotionTriangles | fz::kMotionNearVertices;
+    writeSpec(dir + "/build/motion_triangles_update.bin", s, 512, 18);
+    s = validSpec(2, 9);
+    s.motion = 1;
+    writeSpec(dir + "/build/motion_instances.bin", s, 512, 19);
+    s.g[0].instances = 1;  // typed pointers
+    writeSpec(dir + "/build/motion_instances_pointers.bin", s, 640, 20);
+    s = validSpec(2, 6);
+    s.motion = 1;
+    s.g[0].motion = fz::kMotionOneType | (2 << 4);  // SRT
+    writeSpec(dir + "/build/motion_instances_srt.bin", s, 512, 21);
+    s.g[0].motion = fz::kMotionOneType | (1 << 4) | fz::kMotionNonFinite;  // matrix motion, NaN / inf
+    writeSpec(dir + "/build/motion_instances_matrix_nonfinite.bin", s, 512, 22);
+    s = validSpec(2, 7);
+    s.motion = 1;
+    s.mode = 1 | 2;     // update in place
+    s.g[0].motion = fz::kMotionOneType | (1 << 4);
+    writeSpec(dir + "/build/motion_instances_update.bin", s, 512, 23);
     return 0;
 }
