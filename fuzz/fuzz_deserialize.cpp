@@ -12,6 +12,8 @@
 #include <algorithm>
 #include <cstring>
 
+#include "engine/format_check.hpp"  // the hash is resealed the way vkas checks it
+#include "engine/serialize.hpp"
 #include "fuzz_common.hpp"
 
 namespace {
@@ -23,7 +25,9 @@ using fz::Structure;
 // The largest blob the harness allocates (scripts/run-fuzzers.sh gives inputs of at most 16 KiB; a larger claimed
 // serialized size is replaced by the input size).
 constexpr uint64_t kMaxExtent = 1u << 16;
+// The driver UUIDs of serialized layouts 1 and 2 (docs/FORMAT.md), written out here as the format document gives them.
 constexpr uint8_t kDriverUuid[16] = {'V', 'K', 'A', 'S', '-', 'D', 'R', 'I', 'V', 'E', 'R', '-', 'F', 'M', 'T', '1'};
+constexpr uint8_t kDriverUuid2[16] = {'V', 'K', 'A', 'S', '-', 'S', 'E', 'R', 'I', 'A', 'L', 'I', 'Z', 'E', 'D', '2'};
 constexpr uint8_t kCompatUuid[16] = {'V', 'K', 'A', 'S', '-', 'A', 'S', '-', 'F', 'O', 'R', 'M', 'A', 'T', '-', '1'};
 
 uint64_t load64(const uint8_t* p) {
@@ -179,12 +183,21 @@ VkResult runOn(Device& d, Device& other, const uint8_t* data, size_t size, bool 
     // The type the blob's block names (top level 0); now and then a GENERIC destination.
     uint32_t blockType = 1;
     const uint64_t n = load64(blob.data + 48);
-    if (n < kMaxExtent / 8 && 56 + 8 * n + 12 <= blob.size) blockType = load32(blob.data + 56 + 8 * n + 8);
+    // Serialized layout 2 puts the 8-byte integrity hash between the handle array and the block.
+    const uint64_t blockAt = 56 + 8 * n + (std::memcmp(blob.data, vkas::serial::kDriverUuidV2, 16) == 0 ? 8 : 0);
+    if (n < kMaxExtent / 8 && blockAt + 12 <= blob.size) blockType = load32(blob.data + blockAt + 8);
     VkAccelerationStructureTypeKHR type = blockType == 0 ? VK_ACCELERATION_STRUCTURE_TYPE_TOP_LEVEL_KHR
                                                          : VK_ACCELERATION_STRUCTURE_TYPE_BOTTOM_LEVEL_KHR;
     if ((h & 7) == 5) type = VK_ACCELERATION_STRUCTURE_TYPE_GENERIC_KHR;
     Structure dst = d.createStructure(type, dstSize);
     replaceTokens(d, other, dst, blob);
+    // Most mutated inputs no longer match their integrity hash: reseal seven in eight of them, so that the fuzzer
+    // reaches the structural checks behind the hash (and the eighth keeps testing the hash itself).
+    if ((h >> 3 & 7) != 0) {
+        vkas::serial::SerializedView view;
+        if (vkas::format::checkSerializedLayout(reinterpret_cast<const std::byte*>(blob.data), blob.size, &view).ok())
+            vkas::serial::sealIntegrityHash(view, reinterpret_cast<std::byte*>(blob.data));
+    }
 
     // The compatibility query reads the two UUIDs.
     VkAccelerationStructureVersionInfoKHR vi{VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_VERSION_INFO_KHR};
@@ -221,7 +234,10 @@ VkResult runOn(Device& d, Device& other, const uint8_t* data, size_t size, bool 
                  int(r));
     } else {
         const size_t seedOff = std::min<size_t>(size, 56);
-        exercise(d, dst, load64(blob.data + 40), load64(blob.data + 32), data + seedOff, std::min<size_t>(size - seedOff, 128));
+        // vkas writes serialized layout 2: a loaded layout-1 blob serializes 8 bytes (the integrity hash) larger.
+        const bool layout1 = std::memcmp(blob.data, vkas::serial::kDriverUuidV1, 16) == 0;
+        exercise(d, dst, load64(blob.data + 40), load64(blob.data + 32) + (layout1 ? 8 : 0), data + seedOff,
+                 std::min<size_t>(size - seedOff, 128));
     }
     d.destroyStructure(dst);
     return r;
@@ -234,7 +250,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     Device& on = fz::validatingDevice();
     Device& off = fz::plainDevice();
     const bool compatible =
-        size >= 32 && std::memcmp(data, kDriverUuid, 16) == 0 && std::memcmp(data + 16, kCompatUuid, 16) == 0;
+        size >= 32 && (std::memcmp(data, kDriverUuid, 16) == 0 || std::memcmp(data, kDriverUuid2, 16) == 0) &&
+        std::memcmp(data + 16, kCompatUuid, 16) == 0;
     const VkResult rOn = runOn(on, off, data, size, compatible);
     const VkResult rOff = runOn(off, on, data, size, compatible);
     // Validation adds checks of the handles only: what it accepts loads without it too.

@@ -1239,6 +1239,30 @@ TEST_F(operations_corrupt, malformed_blobs_are_rejected) {
     expectRejectedSealedOrNot(inBlock(bb, 80, h.nodeOffset + 8, 8), BL, "misaligned nodes");
     expectRejectedSealedOrNot(inBlock(bb, 88, ~0ull - 63, 8), BL, "record offset overflow");
     expectRejectedSealedOrNot(inBlock(bb, 56, 1u << 30, 4), BL, "geometry count");
+    // Sections out of order (found by the deserialization fuzzer: the size differences wrapped and passed, and the
+    // geometry table or the nodes were read past usedSize): rejected by the rule that names it.
+    for (const auto& [offset, value, what] :
+         {std::tuple<size_t, uint64_t, const char*>{72, h.usedSize - 8, "geometry table after the nodes"},
+          {80, h.recordOffset + 64, "nodes after the records"}}) {
+        Blob b = inBlock(bb, offset, value, 8);
+        expectRejectedSealedOrNot(b, BL, what);
+        b.reseal();
+        AccelStruct* dst = createAccelStruct(BL, 1 << 20, {});
+        EXPECT_EQ(deserializeInto(b, dst), VK_ERROR_VALIDATION_FAILED_EXT);
+        const std::string message = joined(takeValidationErrors());
+        EXPECT_NE(message.find("not in the order geometry table, nodes, records"), std::string::npos) << what << message;
+    }
+    {
+        // The fuzzer's minimized input (layout 1, no hash): 130 bytes, zero-filled to its serialized size of 568.
+        const char* hex =
+            "564b41532d4452495645522d464d5431564b41532d41532d464f524d41542d31380200000000000000020000000000000000000000"
+            "000000564b415301000000010000000000000000020000000000000000004b483b9ee0e2004cc462ec10bfcdccccbe6766663f6766"
+            "663f6766e63e010000000400000004000000000000000002";
+        Blob f;
+        f.allocate(568, 0);
+        for (size_t i = 0; hex[2 * i]; ++i) f.data[i] = uint8_t(std::stoi(std::string(hex + 2 * i, 2), nullptr, 16));
+        expectRejected(f, BL, "fuzzer input: sections out of order");
+    }
     // The tree.
     const size_t child0 = h.nodeOffset + 192;  // node 0, child slot 0
     expectRejectedSealedOrNot(inBlock(bb, child0, (1ull << 62) | 0, 8), BL, "a cycle to the root");

@@ -8,6 +8,7 @@
 #include <cinttypes>
 #include <cstring>
 #include <unordered_map>
+#include <vector>
 
 #include "api/entry_points.hpp"
 #include "api/guard.hpp"
@@ -111,9 +112,13 @@ VkResult serializeAccelerationStructure(const AccelerationStructure& src, void* 
 }
 
 VkResult deserializeAccelerationStructure(const Device& device, const void* src, AccelerationStructure& dst) {
-    // Whatever fails below, dst ends holding no structure: what it held before may be partly overwritten.
+    // Whatever fails below, dst ends holding no structure. Nothing is copied before the checks pass, so only a
+    // structure dst held before needs undoing (its header's magic cleared); other memory is left as it was.
     const auto fail = [&dst](VkResult result) {
-        markUnconstructed(dst);
+        const std::byte* block = dst.block();
+        if (block && dst.size >= sizeof(format::Header) && format::header(block)->magic == format::kMagic)
+            markUnconstructed(dst);
+        dst.constructed = false;
         return result;
     };
     if (!src) return fail(VK_ERROR_UNKNOWN);
@@ -130,14 +135,22 @@ VkResult deserializeAccelerationStructure(const Device& device, const void* src,
         dst.constructed = false;  // its memory is the blob's: not written
         return VK_ERROR_UNKNOWN;
     }
-    std::memcpy(to, view.block, view.deserializedSize);
-    SerializedReferences references(device, view.layout);
+    // Every non-zero handle-array entry must name a bottom level before anything is copied.
+    std::vector<uint64_t> referenceOfSlot;
     try {
-        if (!serial::bindReferences(view, to, &SerializedReferences::map, &references)) return fail(VK_ERROR_UNKNOWN);
+        referenceOfSlot.resize(view.handleCount);
+        SerializedReferences references(device, view.layout);
+        for (uint64_t k = 0; k < view.handleCount; ++k) {
+            const uint64_t value = load64(view.handles + 8 * k);
+            referenceOfSlot[k] = references.toReference(value);
+            if (value != 0 && referenceOfSlot[k] == 0) return fail(VK_ERROR_UNKNOWN);
+        }
     } catch (...) {
-        markUnconstructed(dst);  // out of memory (the address index): dst holds no structure
+        fail(VK_ERROR_OUT_OF_HOST_MEMORY);  // the slot table or the address index: dst holds no structure
         throw;
     }
+    std::memcpy(to, view.block, view.deserializedSize);
+    serial::bindReferences(view, to, referenceOfSlot.data());
     dst.constructed = true;
     return VK_SUCCESS;
 }

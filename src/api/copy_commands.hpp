@@ -36,9 +36,6 @@ public:
     // The instance reference (a VkAccelerationStructureKHR handle) a loaded top level stores for `value`, or 0
     // when it names no such structure. Allocates (the address index, built on first use): may throw bad_alloc.
     uint64_t toReference(uint64_t value);
-    static uint64_t map(const void* context, uint64_t value) {
-        return static_cast<SerializedReferences*>(const_cast<void*>(context))->toReference(value);
-    }
 
 private:
     const Device& device_;

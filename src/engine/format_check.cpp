@@ -84,6 +84,9 @@ CheckResult checkBlock(const std::byte* block, uint64_t size) {
     const uint64_t used = h.usedSize;
     if (h.geometryOffset < sizeof(Header) || h.geometryOffset > used || h.geometryOffset % 8 != 0)
         return corrupt("geometryOffset is out of range");
+    // In order before the sizes are subtracted (out of order, the differences below would wrap and pass).
+    if (h.nodeOffset < h.geometryOffset || h.recordOffset < h.nodeOffset)
+        return corrupt("the sections are not in the order geometry table, nodes, records");
     if (h.nodeOffset > used || h.nodeOffset % 64 != 0 ||
         uint64_t(h.geometryCount) * sizeof(GeometryDesc) > h.nodeOffset - h.geometryOffset)
         return corrupt("the geometry table does not fit before the nodes");

@@ -126,19 +126,15 @@ void sealIntegrityHash(const SerializedView& view, std::byte* data) {
     store64(data + kHandlesOffset + 8 * view.handleCount, integrityHash(view));
 }
 
-bool bindReferences(const SerializedView& view, std::byte* dst, ReferenceMapper toReference, const void* context) {
+void bindReferences(const SerializedView& view, std::byte* dst, const uint64_t* referenceOfSlot) {
     const format::Header h = loadHeader(dst);
-    if (h.type != uint32_t(format::StructureType::TopLevel)) return true;
+    if (h.type != uint32_t(format::StructureType::TopLevel)) return;
     const uint64_t stride = recordSize(h.type, h.primitiveType, h.buildFlags);
     for (uint64_t r = 0; r < h.recordCount; ++r) {
         std::byte* rec = dst + h.recordOffset + r * stride;
         const uint32_t slot = load32(rec + kInstanceIdOffset);  // < handleCount: checked by format::checkLoadedBlock
-        const uint64_t value = slot < view.handleCount ? load64(view.handles + 8 * uint64_t(slot)) : 0;
-        const uint64_t reference = value == 0 ? 0 : toReference(context, value);
-        if (value != 0 && reference == 0) return false;
-        store64(rec + kInstanceReferenceOffset, reference);
+        store64(rec + kInstanceReferenceOffset, slot < view.handleCount ? referenceOfSlot[slot] : 0);
     }
-    return true;
 }
 
 }  // namespace vkas::serial

@@ -70,8 +70,8 @@ uint64_t serializedSize(const std::byte* block);  // kHeaderSize + 8 * handleCou
 // Clone / compact: copies [0, usedSize) of `src` to `dst` (which must hold compactedSize(src) bytes).
 void copyBlock(const std::byte* src, std::byte* dst);
 
-// Maps one value to another through the application's objects (the API layer knows them, the engine does not):
-// a stored instance reference to the handle-array value when serializing, and back when loading. 0: none.
+// Maps a stored instance reference to the handle-array value (its structure's device address) through the
+// application's objects, which the API layer knows and the engine does not. 0: none.
 using ReferenceMapper = uint64_t (*)(const void* context, uint64_t value);
 
 // Writes serializedSize(block) bytes at `out` (any alignment) in layout 2 (a large block is hashed on a thread of
@@ -97,8 +97,8 @@ uint64_t integrityHash(const SerializedView& view);
 // Rewrites the integrity hash of a layout-2 blob after its bytes were changed on purpose (tests, fuzzers).
 void sealIntegrityHash(const SerializedView& view, std::byte* data);
 
-// Sets each instance reference of the loaded top level at `dst` to toReference(handles[instanceId]); an entry of 0
-// makes its instance inactive. Returns false, leaving some references unset, when a non-zero entry maps to 0.
-bool bindReferences(const SerializedView& view, std::byte* dst, ReferenceMapper toReference, const void* context);
+// Sets each instance reference of the loaded top level at `dst` to referenceOfSlot[instanceId] (handleCount values,
+// resolved by the caller from the handle array; 0 makes the instance inactive).
+void bindReferences(const SerializedView& view, std::byte* dst, const uint64_t* referenceOfSlot);
 
 }  // namespace vkas::serial
