@@ -3,10 +3,10 @@
 // produce exactly one candidate (`singlehit`, non-opaque geometry, candidates counted without confirmation) and
 // never miss (`nomiss`, opaque geometry, closest hit).
 //
-// The spec (ray-traversal-watertight): "any set of two triangles with two identical vertices with identical
-// position values, where their union is a non-degenerate polygon, must yield exactly one intersection if a ray
-// intersects the shared edge" and a ray through the shared vertex of a closed fan "should yield exactly one
-// intersection", as the spec's `Watertightness` rules put it; vkas reports exactly one (docs/API.md).
+// The spec (ray-traversal-watertight): "Implementations should not double-hit or miss when a ray intersects a
+// shared edge, or a shared vertex of a closed fan." vkas reports exactly one (docs/API.md). The rule is about a ray
+// that intersects the surface: a ray that crosses it three times (a fold along the ray) must give three candidates,
+// and one that misses it (outside its open boundary) none.
 //
 // Expectation. The ray a test aims is the object-space ray vkas derives from the world ray (the instance transform
 // and its inverse round), not the ideal vertical ray: how many times it crosses the mesh is decided here exactly
