@@ -131,7 +131,7 @@ Mesh grid(int nx, int ny) {
     return m;
 }
 
-Mesh randomSquareTessellation(int triangleTarget, Rng& rng) {
+Mesh randomSquareTessellation(int triangleTarget, Rng& rng, const TessellationLimits& limits) {
     Mesh m;
     auto z = [&]() { return rng.uniformf(-0.05f, 0.05f); };
     m.positions = {{0, 0, z()}, {1, 0, z()}, {1, 1, z()}, {0, 1, z()}};
@@ -144,6 +144,23 @@ Mesh randomSquareTessellation(int triangleTarget, Rng& rng) {
     m.positions.push_back({rng.uniformf(0.3f, 0.7f), rng.uniformf(0.3f, 0.7f), z()});  // 8
     const uint32_t ring[8] = {0, 4, 1, 5, 2, 6, 3, 7};
     for (int k = 0; k < 8; ++k) m.indices.insert(m.indices.end(), {8, ring[k], ring[(k + 1) % 8]});
+    auto orient = [](const Float3& p0, const Float3& p1, const Float3& p2) {
+        return (double(p1[0]) - p0[0]) * (double(p2[1]) - p0[1]) - (double(p1[1]) - p0[1]) * (double(p2[0]) - p0[0]);
+    };
+    // |grad z| of the height field over one triangle, and its smallest altitude (in the xy plane).
+    auto slope = [&](const Float3& p0, const Float3& p1, const Float3& p2) {
+        const double ax = double(p1[0]) - p0[0], ay = double(p1[1]) - p0[1], az = double(p1[2]) - p0[2];
+        const double bx = double(p2[0]) - p0[0], by = double(p2[1]) - p0[1], bz = double(p2[2]) - p0[2];
+        const double nx = ay * bz - az * by, ny = az * bx - ax * bz, nz = ax * by - ay * bx;
+        return std::sqrt(nx * nx + ny * ny) / std::fabs(nz);
+    };
+    auto altitude = [&](const Float3& p0, const Float3& p1, const Float3& p2) {
+        const double area2 = std::fabs(orient(p0, p1, p2));
+        double longest = 0;
+        for (auto [a, b] : {std::pair{&p0, &p1}, std::pair{&p1, &p2}, std::pair{&p2, &p0}})
+            longest = std::max(longest, std::hypot(double((*b)[0]) - (*a)[0], double((*b)[1]) - (*a)[1]));
+        return area2 / longest;
+    };
     while (int(m.triangleCount()) < triangleTarget) {
         // Split a random triangle at a random interior point into three.
         const size_t t = rng.below(uint32_t(m.triangleCount()));
@@ -155,13 +172,15 @@ Mesh randomSquareTessellation(int triangleTarget, Rng& rng) {
         const Float3 P{float(w0 * A[0] + w1 * B[0] + w2 * C[0]), float(w0 * A[1] + w1 * B[1] + w2 * C[1]), z()};
         // The point is rounded to float: make sure it is still well inside, so that the three new triangles keep
         // the (counter-clockwise) orientation and the mesh stays a height field without folds.
-        auto orient = [](const Float3& p0, const Float3& p1, const Float3& p2) {
-            return (double(p1[0]) - p0[0]) * (double(p2[1]) - p0[1]) - (double(p1[1]) - p0[1]) * (double(p2[0]) - p0[0]);
-        };
         const double whole = orient(A, B, C);
         if (!(whole > 1e-12) || !(orient(A, B, P) > 1e-3 * whole) || !(orient(B, C, P) > 1e-3 * whole) ||
             !(orient(C, A, P) > 1e-3 * whole))
             continue;
+        // Bounded slopes and no slivers thinner than float rounding can resolve (see TessellationLimits).
+        bool fits = true;
+        for (auto [p0, p1] : {std::pair{&A, &B}, std::pair{&B, &C}, std::pair{&C, &A}})
+            fits = fits && slope(*p0, *p1, P) <= limits.maxSlope && altitude(*p0, *p1, P) >= limits.minAltitude;
+        if (!fits) continue;
         m.positions.push_back(P);
         const uint32_t p = uint32_t(m.positions.size() - 1);
         m.indices[3 * t + 2] = p;  // (a, b, p)

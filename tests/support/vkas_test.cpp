@@ -160,6 +160,8 @@ Hit readHit(const VkasRayQuery& q, bool committed) {
     h.sbtOffset = vkasRayQueryGetIntersectionInstanceShaderBindingTableRecordOffset(&q, c);
     vkasRayQueryGetIntersectionBarycentrics(&q, c, h.bary);
     h.frontFace = vkasRayQueryGetIntersectionFrontFace(&q, c) == VK_TRUE;
+    vkasRayQueryGetIntersectionObjectRayOrigin(&q, c, h.objectOrigin);
+    vkasRayQueryGetIntersectionObjectRayDirection(&q, c, h.objectDirection);
     if (!committed && h.type == VKAS_CANDIDATE_INTERSECTION_AABB)
         h.aabbOpaque = vkasRayQueryGetIntersectionCandidateAABBOpaque(&q) == VK_TRUE;
     return h;

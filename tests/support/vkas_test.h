@@ -169,6 +169,7 @@ struct Hit {
     float bary[2] = {0, 0};
     bool frontFace = false;
     bool aabbOpaque = false;  // AABB candidates: CandidateAABBOpaque
+    float objectOrigin[3] = {0, 0, 0}, objectDirection[3] = {0, 0, 0};  // ray queries: the object-space ray
     std::string str() const;
 };
 Hit readHit(const VkasRayQuery& q, bool committed);
