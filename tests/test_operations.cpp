@@ -24,6 +24,7 @@
 
 #include <xxhash.h>
 
+#include "engine/serialize.hpp"  // serializeBlock's two hash schedules, compared below
 #include "meshes.h"
 
 using namespace vt;
@@ -690,6 +691,30 @@ TEST_F(operations_misc, serialized_header) {
             for (uint32_t r = 0; r < h.recordCount; ++r)
                 EXPECT_EQ(load64(b.payload() + h.recordOffset + 128 * r + 104), 0u);
         }
+    }
+}
+
+// Serialization hashes a large block either on a second processor while it copies, or chunk by chunk after copying
+// each (one processor): the two schedules must write the same bytes, and the same as the command.
+TEST_F(operations_misc, hash_schedules_write_the_same_bytes) {
+    keep.push_back(makeGeometry(triangleSoup(30000, rng, 0.05f), VK_INDEX_TYPE_UINT32, VK_GEOMETRY_OPAQUE_BIT_KHR));
+    AccelStruct* big = buildBlas(*keep.back());
+    AccelStruct* tlas = buildTlas(latticeInstances({big}, 12000));
+    for (AccelStruct* as : {big, tlas}) {
+        ASSERT_GE(usedSize(as), 1u << 20) << "small enough for one schedule only";
+        const Blob viaCommand = serialize(as);
+        const uint64_t addressOfBig = address(big);
+        const auto toAddress = [](const void* context, uint64_t) { return *static_cast<const uint64_t*>(context); };
+        Blob a = viaCommand, f = viaCommand;
+        std::memset(a.data, 0x5A, a.size);
+        std::memset(f.data, 0xA5, f.size);
+        vkas::serial::serializeBlock(reinterpret_cast<const std::byte*>(as->data()), reinterpret_cast<std::byte*>(a.data),
+                                     toAddress, &addressOfBig, vkas::serial::HashSchedule::Alongside);
+        vkas::serial::serializeBlock(reinterpret_cast<const std::byte*>(as->data()), reinterpret_cast<std::byte*>(f.data),
+                                     toAddress, &addressOfBig, vkas::serial::HashSchedule::Fused);
+        EXPECT_EQ(0, std::memcmp(a.data, f.data, a.size));
+        EXPECT_EQ(0, std::memcmp(a.data, viaCommand.data, a.size));
+        EXPECT_EQ(f.storedHash(), f.computedHash());
     }
 }
 

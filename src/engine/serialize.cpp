@@ -49,6 +49,9 @@ namespace {
 // Above this many bytes the hash runs on a thread of its own beside the copy or the structural checks (a thread
 // costs tens of microseconds; hashing 1 MiB about as much).
 constexpr uint64_t kHashAlongsideBytes = 1 << 20;
+// The chunk a single processor copies and then hashes while it is still in cache (64 KiB measured best with 16 KiB
+// on a 16-core Xeon: copy and hash 1.1-1.2x the copy alone, against 1.6x for a second pass).
+constexpr uint64_t kFusedChunk = 64 * 1024;
 
 // The integrity hash of a serialized block, computed from the structure's own block: its bytes as they will be
 // written, that is with every instance reference read as 0.
@@ -78,7 +81,8 @@ uint64_t hashOfBlock(const std::byte* head, const std::byte* block, const format
 
 }  // namespace
 
-void serializeBlock(const std::byte* block, std::byte* out, ReferenceMapper toAddress, const void* context) {
+void serializeBlock(const std::byte* block, std::byte* out, ReferenceMapper toAddress, const void* context,
+                    HashSchedule schedule) {
     const format::Header h = loadHeader(block);
     const uint64_t n = handleCount(block);
     const bool topLevel = h.type == uint32_t(format::StructureType::TopLevel);
@@ -91,26 +95,46 @@ void serializeBlock(const std::byte* block, std::byte* out, ReferenceMapper toAd
     std::byte* handles = out + kHandlesOffset;
     std::byte* payload = handles + 8 * n + kIntegrityHashSize;
     const uint64_t stride = recordSize(h.type, h.primitiveType, h.buildFlags);
+    const auto writeHandles = [&] {
+        // Spec (serialized header): "The corresponding handles matching the values returned by
+        // vkGetAccelerationStructureDeviceAddressKHR or vkGetAccelerationStructureHandleNV are tightly packed in the
+        // buffer following the count." Slot k belongs to the instance whose instanceId is k.
+        std::memcpy(out, head, kHeaderSize);
+        std::memset(handles, 0, 8 * n);
+        if (!topLevel) return;
+        for (uint64_t r = 0; r < h.recordCount; ++r) {
+            const std::byte* rec = block + h.recordOffset + r * stride;
+            const uint32_t slot = load32(rec + kInstanceIdOffset);
+            const uint64_t reference = load64(rec + kInstanceReferenceOffset);
+            if (slot < n && reference != 0) store64(handles + 8 * uint64_t(slot), toAddress(context, reference));
+        }
+    };
     uint64_t hash = 0;
-    alongside(
-        h.usedSize >= kHashAlongsideBytes, [&] { hash = hashOfBlock(head, block, h); },
-        [&] {
-            std::memcpy(out, head, kHeaderSize);
-            // Spec (serialized header): "The corresponding handles matching the values returned by
-            // vkGetAccelerationStructureDeviceAddressKHR or vkGetAccelerationStructureHandleNV are tightly packed
-            // in the buffer following the count." Slot k belongs to the instance whose instanceId is k.
-            std::memset(handles, 0, 8 * n);
-            std::memcpy(payload, block, h.usedSize);
-            if (!topLevel) return;
-            for (uint64_t r = 0; r < h.recordCount; ++r) {
-                const std::byte* rec = block + h.recordOffset + r * stride;
-                const uint32_t slot = load32(rec + kInstanceIdOffset);
-                const uint64_t reference = load64(rec + kInstanceReferenceOffset);
-                if (slot < n && reference != 0) store64(handles + 8 * uint64_t(slot), toAddress(context, reference));
-                // The block keeps 0 there, so the hashed bytes depend only on the build inputs.
-                store64(payload + h.recordOffset + r * stride + kInstanceReferenceOffset, 0);
-            }
-        });
+    if (schedule == HashSchedule::Alongside && h.usedSize >= kHashAlongsideBytes && secondProcessorAvailable()) {
+        // The source block is hashed (its references read as 0) on a second processor while this one copies.
+        alongside(
+            true, [&] { hash = hashOfBlock(head, block, h); },
+            [&] {
+                writeHandles();
+                std::memcpy(payload, block, h.usedSize);
+                for (uint64_t r = 0; topLevel && r < h.recordCount; ++r)
+                    store64(payload + h.recordOffset + r * stride + kInstanceReferenceOffset, 0);
+            });
+    } else {
+        // One processor: copy a chunk, clear the instance references in it, hash it while it is in cache.
+        writeHandles();
+        IntegrityHash ih;
+        ih.add(head, kHeaderSize);
+        uint64_t nextReference = h.recordOffset + kInstanceReferenceOffset, recordsLeft = topLevel ? h.recordCount : 0;
+        for (uint64_t at = 0; at < h.usedSize; at += kFusedChunk) {
+            const uint64_t end = h.usedSize - at < kFusedChunk ? h.usedSize : at + kFusedChunk;
+            std::memcpy(payload + at, block + at, end - at);
+            for (; recordsLeft != 0 && nextReference < end; --recordsLeft, nextReference += stride)
+                store64(payload + nextReference, 0);
+            ih.add(payload + at, end - at);
+        }
+        hash = ih.digest();
+    }
     store64(handles + 8 * n, hash);
 }
 

@@ -74,11 +74,17 @@ void copyBlock(const std::byte* src, std::byte* dst);
 // application's objects, which the API layer knows and the engine does not. 0: none.
 using ReferenceMapper = uint64_t (*)(const void* context, uint64_t value);
 
-// Writes serializedSize(block) bytes at `out` (any alignment) in layout 2 (a large block is hashed on a thread of
-// its own while it is copied). Handle slot k holds
-// toAddress(reference) of the instance whose instanceId is k (0 for an inactive instance); the block's own instance
-// references are written as 0, so the hashed bytes depend only on the build inputs.
-void serializeBlock(const std::byte* block, std::byte* out, ReferenceMapper toAddress, const void* context);
+// How serialization computes the integrity hash; the bytes written are the same either way.
+enum class HashSchedule {
+    Alongside,  // a large block (1 MiB and up) is hashed on a second processor, when there is one, while it is copied
+    Fused,      // each chunk is hashed right after it is copied, while it is in cache (one processor)
+};
+
+// Writes serializedSize(block) bytes at `out` (any alignment) in layout 2. Handle slot k holds toAddress(reference)
+// of the instance whose instanceId is k (0 for an inactive instance); the block's own instance references are
+// written as 0, so the hashed bytes depend only on the build inputs.
+void serializeBlock(const std::byte* block, std::byte* out, ReferenceMapper toAddress, const void* context,
+                    HashSchedule schedule = HashSchedule::Alongside);
 
 // Where the parts of a serialized blob lie; filled by format::checkSerializedLayout.
 struct SerializedView {
