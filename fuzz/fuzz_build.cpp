@@ -750,8 +750,9 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
             infos[i].srcAccelerationStructure = (spec.misc & 32) ? VkAccelerationStructureKHR(d.deadHandle) : src.handle;
         }
         if (spec.mode & 128) infos[i].mode = VkBuildAccelerationStructureModeKHR(2);
-        if (usePointers && !(spec.misc & 4)) infos[i].ppGeometries = inputs->pointers;
-        else if (infos[i].pGeometries) infos[i].pGeometries = inputs->plain;
+        // The update's inputs in whichever of the two arrays the build info names (misc bit 8: neither, which the
+        // size query above reported: the build must report it too, so no array may be put back here).
+        if (infos[i].pGeometries) infos[i].pGeometries = inputs->plain;
         if (infos[i].ppGeometries) infos[i].ppGeometries = inputs->pointers;
         infos[i].dstAccelerationStructure = dst[i].handle;
         if (spec.misc & 64) infos[i].dstAccelerationStructure = reinterpret_cast<VkAccelerationStructureKHR>(garbage.data);
