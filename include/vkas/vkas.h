@@ -40,7 +40,7 @@ typedef struct VkasDeviceCreateInfo {
     VkBool32 disableValidation;                        /* VK_FALSE (default): every command checks its valid usage */
     PFN_vkDebugUtilsMessengerCallbackEXT pfnMessenger; /* NULL: messages go to stderr */
     void* pMessengerUserData;
-    uint32_t workerThreadCount; /* threads for vkas's own batch helpers; 0 = all cores */
+    uint32_t workerThreadCount; /* threads of vkasTraceRays and vkasTraceRaysProcedural (the calling one included); 0 = all cores */
 } VkasDeviceCreateInfo;
 
 VKAS_API VkResult vkasCreateDevice(const VkasDeviceCreateInfo* pCreateInfo /* may be NULL */, VkDevice* pDevice);
