@@ -201,7 +201,7 @@ CheckResult checkSerialized(const std::byte* data, uint64_t size, serial::Serial
     bool hashMatches = true;
     CheckResult block;
     alongside(
-        v.layout == serial::Layout::V2 && v.deserializedSize >= (1u << 20),
+        v.layout == serial::Layout::V2 && v.deserializedSize >= serial::kHashAlongsideBytes,
         [&] { hashMatches = v.layout != serial::Layout::V2 || serial::integrityHash(v) == v.storedHash; },
         [&] { block = checkLoadedBlock(v, v.block); });
     if (!hashMatches) return corrupt("the integrity hash does not match the data (the blob was changed)");

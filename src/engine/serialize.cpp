@@ -48,9 +48,6 @@ void copyBlock(const std::byte* src, std::byte* dst) {
 
 namespace {
 
-// Above this many bytes the hash runs on a thread of its own beside the copy or the structural checks (a thread
-// costs tens of microseconds; hashing 1 MiB about as much).
-constexpr uint64_t kHashAlongsideBytes = 1 << 20;
 // The chunk a single processor copies and then hashes while it is still in cache (64 KiB measured best with 16 KiB
 // on a 16-core Xeon: copy and hash 1.1-1.2x the copy alone, against 1.6x for a second pass).
 constexpr uint64_t kFusedChunk = 64 * 1024;

@@ -22,6 +22,10 @@ constexpr size_t kHandleCountOffset = 48;
 constexpr size_t kHandlesOffset = 56;  // N u64 device addresses follow, then the opaque part
 constexpr size_t kHeaderSize = 56;
 constexpr size_t kIntegrityHashSize = 8;  // layout 2: the u64 hash right after the handle array
+// From this many bytes on, the hash runs on a thread of its own beside the copy (serialization) or beside the
+// structural checks (deserialization), when a second processor is there (a thread costs tens of microseconds;
+// hashing 1 MiB about as much).
+constexpr uint64_t kHashAlongsideBytes = 1 << 20;
 
 // The layouts of the serialized form. The driverUUID names the layout (the envelope around the block), the
 // compatibility UUID the block's format version; both are fixed ASCII strings (no terminator). A later vkas keeps
