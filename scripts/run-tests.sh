@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# The README's second command (and CI's, through .ci/run): installs the build dependencies, then
+# The README's second command (and CI's, through .ci/run): installs the build dependencies, checks the engine's
+# include direction (scripts/check-layers.sh), then
 #   1. builds RelWithDebInfo in build/ and runs the test suite (ctest) and a smoke run of the vkas tool;
 #   2. builds with AddressSanitizer + UndefinedBehaviorSanitizer in build-asan/ (with Clang, and the libFuzzer targets)
 #      and runs the same there, then runs each fuzz target for a bounded time (scripts/run-fuzzers.sh);
@@ -63,6 +64,10 @@ if ! "$root/scripts/setup-deps.sh"; then
   echo "run-tests: FAILED: could not install the build dependencies"
   exit 1
 fi
+
+banner "layers (scripts/check-layers.sh)"
+"$root/scripts/check-layers.sh"
+record "layers" $? "util <- format <- input <- build, format <- trace"
 
 banner "lavapipe (the differential-conformance referee)"
 # The differential tests skip, loudly, only when lavapipe cannot be installed; once it is, they must run.

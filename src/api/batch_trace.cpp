@@ -7,8 +7,8 @@
 #include "api/device.hpp"
 #include "api/guard.hpp"
 #include "api/validation.hpp"
-#include "engine/trace_kernel.hpp"
-#include "engine/traversal.hpp"
+#include "engine/trace/batch_kernel.hpp"
+#include "engine/trace/ray_query.hpp"
 
 namespace vkas {
 bool validateRay(Validator& v, const AccelerationStructure* tlas, uint32_t rayFlags, const float origin[3],

@@ -13,9 +13,9 @@
 #include "api/entry_points.hpp"
 #include "api/guard.hpp"
 #include "api/validation.hpp"
-#include "engine/format.hpp"
-#include "engine/format_check.hpp"
-#include "engine/serialize.hpp"
+#include "engine/format/layout.hpp"
+#include "engine/format/check.hpp"
+#include "engine/format/serialize.hpp"
 
 namespace vkas {
 

@@ -12,7 +12,7 @@
 
 #include "api/device.hpp"
 #include "api/objects.hpp"
-#include "engine/serialize.hpp"
+#include "engine/format/serialize.hpp"
 
 namespace vkas {
 

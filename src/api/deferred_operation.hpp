@@ -13,7 +13,7 @@
 #include <vector>
 
 #include "api/objects.hpp"
-#include "engine/bvh_builder.hpp"
+#include "engine/util/parallel_for.hpp"
 
 namespace vkas {
 

@@ -4,7 +4,7 @@
 #include "api/guard.hpp"
 
 #include "api/validation.hpp"
-#include "engine/format.hpp"
+#include "engine/format/layout.hpp"
 
 #include <cstdlib>
 #include <shared_mutex>

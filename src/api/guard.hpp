@@ -14,7 +14,7 @@
 #include <type_traits>
 
 #include "api/objects.hpp"
-#include "engine/format.hpp"
+#include "engine/format/layout.hpp"
 
 namespace vkas {
 

@@ -5,7 +5,7 @@
 #include "api/entry_points.hpp"
 #include "api/guard.hpp"
 #include "api/limits.hpp"
-#include "engine/vertex_format.hpp"
+#include "engine/input/vertex_format.hpp"
 
 namespace {
 

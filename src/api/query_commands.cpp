@@ -6,8 +6,8 @@
 #include "api/copy_commands.hpp"
 #include "api/entry_points.hpp"
 #include "api/validation.hpp"
-#include "engine/format.hpp"
-#include "engine/serialize.hpp"
+#include "engine/format/layout.hpp"
+#include "engine/format/serialize.hpp"
 
 namespace vkas {
 

@@ -6,8 +6,8 @@
 #include "api/device.hpp"
 #include "api/objects.hpp"
 #include "api/validation.hpp"
-#include "engine/motion.hpp"
-#include "engine/traversal.hpp"
+#include "engine/format/motion.hpp"
+#include "engine/trace/ray_query.hpp"
 #include "vkas/vkas.h"
 
 namespace {

@@ -2,8 +2,8 @@
 
 #include <cmath>
 
-#include "engine/sphere_fetch.hpp"
-#include "engine/vertex_format.hpp"
+#include "engine/input/swept_spheres.hpp"
+#include "engine/input/vertex_format.hpp"
 
 namespace vkas {
 

@@ -4,9 +4,9 @@
 
 #include <algorithm>
 
-#include "engine/as_build.hpp"
-#include "engine/format.hpp"
-#include "engine/refit.hpp"
+#include "engine/input/build_inputs.hpp"
+#include "engine/format/layout.hpp"
+#include "engine/build/refit.hpp"
 
 namespace vkas {
 

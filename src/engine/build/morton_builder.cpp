@@ -1,0 +1,328 @@
+#include "engine/build/morton_builder.hpp"
+
+#include <immintrin.h>
+
+#include <algorithm>
+#include <cstring>
+#include <limits>
+#include <memory>
+#include <vector>
+
+#include "engine/util/simd_box.hpp"
+
+namespace vkas {
+
+using format::ChildRef;
+using format::Node;
+
+namespace {
+
+// Bits per axis of the Morton code, at most: a cell is 1/16,384 of the largest centroid extent, and 42 code bits
+// leave 22 for the index (more primitives take bits from the code: 10 per axis at 2^32).
+constexpr uint32_t kMaxAxisBits = 14;
+// The sort: one pass over all keys by the code's top 10 bits (1,024 buckets: few enough write streams for the
+// caches and TLB), then each bucket, now small enough to stay in cache, by 8-bit digits of the rest.
+constexpr uint32_t kTopBits = 10;
+constexpr uint32_t kLowDigitBits = 8;
+constexpr uint32_t kMaxLowPasses = (3 * kMaxAxisBits - kTopBits + kLowDigitBits - 1) / kLowDigitBits;
+constexpr uint32_t kInsertionSortMax = 48;  // buckets up to this size: insertion sort beats counting passes
+
+// bits[v]: the 7 bits of v moved apart to bits 0, 3, 6, ..., 18. Two lookups spread 14 bits.
+struct SpreadTable {
+    uint64_t bits[128];
+    constexpr SpreadTable() : bits{} {
+        for (uint32_t v = 0; v < 128; ++v)
+            for (uint32_t k = 0; k < 7; ++k) bits[v] |= uint64_t((v >> k) & 1) << (3 * k);
+    }
+};
+constexpr SpreadTable kSpread;
+inline uint64_t spreadBits3(uint32_t v) { return kSpread.bits[v & 127] | kSpread.bits[(v >> 7) & 127] << 21; }
+
+// A primitive's bounds from its PrimRef (lane 3, the index, cleared).
+inline void load(const PrimRef& p, __m128& lo, __m128& up) {
+    lo = xyz(_mm_loadu_ps(p.lower));
+    up = xyz(_mm_loadu_ps(p.upper));
+}
+
+// Half-sums: the centroid without the overflow of lower + upper near the float range's ends.
+inline __m128 centroid(__m128 lo, __m128 up) {
+    const __m128 half = _mm_set1_ps(0.5f);
+    return _mm_add_ps(_mm_mul_ps(lo, half), _mm_mul_ps(up, half));
+}
+
+// All-ones in the lanes whose value is finite (NaN and +-inf compare false).
+inline __m128 finiteMask(__m128 v) {
+    const __m128 abs = _mm_andnot_ps(_mm_set1_ps(-0.0f), v);
+    return _mm_cmplt_ps(abs, _mm_set1_ps(std::numeric_limits<float>::infinity()));
+}
+inline __m128 select(__m128 mask, __m128 a, __m128 b) { return _mm_or_ps(_mm_and_ps(mask, a), _mm_andnot_ps(mask, b)); }
+
+// Pass 1: the tree's bounds (with Aabb::extend's rules, as buildWideBvh computes them) and the bounds of the
+// finite centroids (an infinite or NaN coordinate would stretch the grid to nothing; such centroids are clamped).
+struct InputBounds {
+    __m128 lower = _mm_set1_ps(std::numeric_limits<float>::infinity());
+    __m128 upper = _mm_set1_ps(-std::numeric_limits<float>::infinity());
+    __m128 centroidLower = _mm_set1_ps(std::numeric_limits<float>::infinity());
+    __m128 centroidUpper = _mm_set1_ps(-std::numeric_limits<float>::infinity());
+
+    void add(const PrimRef* refs, uint32_t begin, uint32_t end) {
+        const __m128 inf = _mm_set1_ps(std::numeric_limits<float>::infinity());
+        const __m128 negInf = _mm_set1_ps(-std::numeric_limits<float>::infinity());
+        for (uint32_t i = begin; i < end; ++i) {
+            __m128 lo, up;
+            load(refs[i], lo, up);
+            // Aabb::extend(p) is min(p, acc) per lane: a NaN coordinate leaves the bound as it was.
+            lower = _mm_min_ps(up, _mm_min_ps(lo, lower));
+            upper = _mm_max_ps(up, _mm_max_ps(lo, upper));
+            const __m128 c = centroid(lo, up);
+            const __m128 finite = finiteMask(c);
+            centroidLower = _mm_min_ps(centroidLower, select(finite, c, inf));
+            centroidUpper = _mm_max_ps(centroidUpper, select(finite, c, negInf));
+        }
+    }
+};
+
+// Maps a centroid to integer grid cells [0, 2^bits) per axis: q = c * scale - offset, clamped in float (NaN and
+// -inf land in cell 0, +inf in the last), so invalid input still gets a valid code. The cells are cubes (one
+// scale, from the largest extent): per-axis scales would split a flat scene across its thin axis as often as along
+// the others (torcs-forza: SAH cost 11.2 with per-axis scales, 7.2 with cubes; docs/PERFORMANCE.md).
+struct Quantizer {
+    __m128 scale, offset, lastCell;
+
+    Quantizer(const InputBounds& b, uint32_t bits) {
+        alignas(16) float lo[4], up[4], s[4] = {0, 0, 0, 0}, o[4] = {0, 0, 0, 0};
+        _mm_store_ps(lo, b.centroidLower);
+        _mm_store_ps(up, b.centroidUpper);
+        const double cells = double(1u << bits);
+        double extent = 0;  // in double: no overflow
+        for (int a = 0; a < 3; ++a)
+            if (up[a] >= lo[a]) extent = std::max(extent, double(up[a]) - double(lo[a]));
+        for (int a = 0; a < 3; ++a) {
+            if (!(up[a] >= lo[a]) || !(extent > 0)) continue;  // no finite centroid, or one cell
+            s[a] = float(cells / extent);
+            o[a] = float(double(lo[a]) * double(s[a]));
+        }
+        scale = _mm_load_ps(s);
+        offset = _mm_load_ps(o);
+        lastCell = _mm_set1_ps(float(cells - 1));
+    }
+
+    uint64_t code(__m128 lo, __m128 up) const {
+        __m128 q = _mm_sub_ps(_mm_mul_ps(centroid(lo, up), scale), offset);
+        q = _mm_min_ps(_mm_max_ps(q, _mm_setzero_ps()), lastCell);  // max(NaN, 0) is 0
+        alignas(16) int32_t c[4];
+        _mm_store_si128(reinterpret_cast<__m128i*>(c), _mm_cvttps_epi32(q));
+        return spreadBits3(uint32_t(c[0])) | spreadBits3(uint32_t(c[1])) << 1 | spreadBits3(uint32_t(c[2])) << 2;
+    }
+};
+
+// The sort key of primitive i: its Morton code above its index. The index makes every key unique, so the sorted
+// order (and the tree) is one and the same whatever sorts it, and keeps the primitives of one cell in input order.
+struct KeyLayout {
+    uint32_t indexBits;  // bits of the largest index, at least 1
+    uint32_t axisBits;   // Morton bits per axis
+    uint32_t codeBits() const { return 3 * axisBits; }
+    uint64_t indexMask() const { return (uint64_t(1) << indexBits) - 1; }
+    uint32_t topDigit(uint64_t key) const {
+        return uint32_t(key >> (indexBits + codeBits() - kTopBits)) & ((1u << kTopBits) - 1);
+    }
+    // Digit p (from the lowest) of the code bits below the top digit.
+    uint32_t lowDigit(uint64_t key, uint32_t p) const {
+        return uint32_t(key >> (indexBits + p * kLowDigitBits)) & ((1u << kLowDigitBits) - 1);
+    }
+    uint32_t lowPasses() const { return (codeBits() - kTopBits + kLowDigitBits - 1) / kLowDigitBits; }
+
+    explicit KeyLayout(uint32_t n) {
+        indexBits = 1;
+        while (indexBits < 32 && (uint64_t(1) << indexBits) < n) ++indexBits;
+        axisBits = std::min(kMaxAxisBits, (64 - indexBits) / 3);  // >= 10: the top digit fits
+    }
+};
+
+// Pass 2: the keys of refs[begin, end) and the count of each top digit.
+void makeKeys(const PrimRef* refs, uint32_t begin, uint32_t end, const Quantizer& quant, const KeyLayout& layout,
+              uint64_t* keys, uint32_t* topCount) {
+    for (uint32_t i = begin; i < end; ++i) {
+        __m128 lo, up;
+        load(refs[i], lo, up);
+        const uint64_t key = quant.code(lo, up) << layout.indexBits | i;
+        keys[i] = key;
+        topCount[layout.topDigit(key)]++;
+    }
+}
+
+// Sorts the keys of one top-digit bucket, given in src[0, n), into dst[0, n) (tmp: n more keys). Stable LSD
+// passes over the remaining code digits (the index bits below are in order already), skipping digits that are
+// the same for every key; small buckets by insertion sort (keys are unique: any sort gives the same order).
+void sortBucket(uint64_t* src, uint64_t* dst, uint64_t* tmp, uint32_t n, const KeyLayout& layout) {
+    if (n <= kInsertionSortMax) {
+        for (uint32_t i = 0; i < n; ++i) {
+            const uint64_t key = src[i];
+            uint32_t j = i;
+            for (; j > 0 && dst[j - 1] > key; --j) dst[j] = dst[j - 1];
+            dst[j] = key;
+        }
+        return;
+    }
+    constexpr uint32_t kDigits = 1u << kLowDigitBits;
+    const uint32_t passes = layout.lowPasses();
+    uint32_t count[kMaxLowPasses][kDigits] = {};
+    for (uint32_t i = 0; i < n; ++i)
+        for (uint32_t p = 0; p < passes; ++p) count[p][layout.lowDigit(src[i], p)]++;
+    uint64_t* from = src;
+    for (uint32_t p = 0; p < passes; ++p) {
+        if (count[p][layout.lowDigit(from[0], p)] == n) continue;
+        uint64_t* to = from == dst ? tmp : dst;
+        uint32_t offset[kDigits];
+        uint32_t sum = 0;
+        for (uint32_t d = 0; d < kDigits; ++d) offset[d] = sum, sum += count[p][d];
+        for (uint32_t i = 0; i < n; ++i) to[offset[layout.lowDigit(from[i], p)]++] = from[i];
+        from = to;
+    }
+    if (from != dst) std::memcpy(dst, from, n * sizeof(uint64_t));
+}
+
+// A range [begin, end) of the sorted primitives and the binary splits above it.
+struct Range {
+    uint32_t begin, end, depth;
+    uint32_t count() const { return end - begin; }
+};
+
+// Builds the tree top-down over the sorted keys; bounds come back up from the leaves. Leaves copy their sorted
+// references into the output array (the contract: leaves are ranges of refs).
+class TreeWriter {
+public:
+    TreeWriter(const uint64_t* keys, uint32_t indexBits, const PrimRef* sorted, PrimRef* out, Node* nodes,
+               uint32_t maxLeafSize)
+        : keys_(keys), indexBits_(indexBits), sorted_(sorted), out_(out), nodes_(nodes), maxLeafSize_(maxLeafSize) {}
+
+    ChildRef build(const Range& r, SimdBoxNanSpreads& box) {
+        if (r.count() <= maxLeafSize_) return leaf(r, box);
+        const uint32_t index = nodeCount_++;
+        // The node's range is its only child at first; the child of most primitives is split until there are 8
+        // children or every child is a leaf. So every node has 8 children or only leaf children (the node-count
+        // bound of docs/FORMAT.md), and it always splits its own range at least once (no endless recursion).
+        Range children[format::kNodeWidth];
+        uint32_t n = 1;
+        children[0] = r;
+        while (n < format::kNodeWidth) {
+            int best = -1;
+            uint32_t bestCount = maxLeafSize_;
+            for (uint32_t i = 0; i < n; ++i)
+                if (children[i].count() > bestCount) bestCount = children[i].count(), best = int(i);
+            if (best < 0) break;
+            const Range whole = children[best];
+            split(whole, children[best], children[n++]);
+        }
+        // Slots in range order: the depth-first build then visits the leaves in array order (streaming reads
+        // and writes), and a node's subtrees lie in the order of their primitives.
+        std::sort(children, children + n, [](const Range& a, const Range& b) { return a.begin < b.begin; });
+        Node node;
+        alignas(16) float lo[4], up[4];
+        for (uint32_t i = 0; i < format::kNodeWidth; ++i) {
+            SimdBoxNanSpreads child;
+            node.child[i] = format::kEmptyRef;
+            if (i < n) {
+                node.child[i] = build(children[i], child);
+                box.extend(child);
+            }
+            _mm_store_ps(lo, child.lower);
+            _mm_store_ps(up, child.upper);
+            node.lowerX[i] = lo[0], node.lowerY[i] = lo[1], node.lowerZ[i] = lo[2];
+            node.upperX[i] = up[0], node.upperY[i] = up[1], node.upperZ[i] = up[2];
+        }
+        nodes_[index] = node;
+        return format::makeInternalRef(index);
+    }
+
+    uint32_t nodeCount() const { return nodeCount_; }
+
+private:
+    ChildRef leaf(const Range& r, SimdBoxNanSpreads& box) {
+        for (uint32_t i = r.begin; i < r.end; ++i) {
+            __m128 lo, up;
+            load(sorted_[i], lo, up);
+            box.extend(lo, up);
+            out_[i] = sorted_[i];
+        }
+        return format::makeLeafRef(r.begin, r.count());
+    }
+
+    // Splits where the highest bit that differs between the range's first and last code turns to 1 (the codes
+    // are sorted, so a binary search finds it). Identical codes, and every range below binary split depth
+    // kSahDepthLimit, are halved: depth stays within format::kMaxTreeDepth.
+    void split(const Range& r, Range& left, Range& right) const {
+        uint32_t mid = r.begin + r.count() / 2;
+        const uint64_t first = keys_[r.begin] >> indexBits_, last = keys_[r.end - 1] >> indexBits_;
+        if (r.depth < format::kSahDepthLimit && first != last) {
+            const int bit = 63 - __builtin_clzll(first ^ last);
+            const uint64_t threshold = (last >> bit << bit) << indexBits_;  // common prefix, then the 1 bit
+            // Branch-free lower bound: the comparisons are unpredictable, a conditional move is not.
+            const uint64_t* base = keys_ + r.begin;
+            for (uint32_t len = r.count(); len > 1;) {
+                const uint32_t half = len / 2;
+                base = base[half] < threshold ? base + half : base;
+                len -= half;
+            }
+            mid = uint32_t(base - keys_) + (*base < threshold);
+        }
+        left = {r.begin, mid, r.depth + 1};
+        right = {mid, r.end, r.depth + 1};
+    }
+
+    const uint64_t* keys_;
+    uint32_t indexBits_;
+    const PrimRef* sorted_;
+    PrimRef* out_;
+    Node* nodes_;
+    uint32_t maxLeafSize_;
+    uint32_t nodeCount_ = 0;
+};
+
+}  // namespace
+
+BvhBuildResult buildMortonBvh(PrimRef* refs, uint32_t n, uint32_t maxLeafSize, Node* nodes,
+                              const ParallelFor* /*parallel: serial for now*/) {
+    BvhBuildResult result;
+    if (n == 0) return result;
+    InputBounds input;
+    input.add(refs, 0, n);
+    result.bounds = SimdBoxNanSpreads{input.lower, input.upper}.aabb();
+    if (n <= maxLeafSize) {
+        result.root = format::makeLeafRef(0, n);
+        return result;
+    }
+
+    const KeyLayout layout(n);
+    const Quantizer quant(input, layout.axisBits);
+    std::unique_ptr<uint64_t[]> keyBuffer(new uint64_t[2 * uint64_t(n)]);
+    uint64_t* keys = keyBuffer.get();
+    uint64_t* other = keys + n;
+    std::vector<uint32_t> topCount(1u << kTopBits, 0);
+    makeKeys(refs, 0, n, quant, layout, keys, topCount.data());
+
+    // Scatter by the top digit into `other` (stable), then sort each bucket back into `keys`; the bucket's span of
+    // `other` is its second buffer once its keys are counted.
+    std::vector<uint32_t> bucketBegin(topCount.size() + 1, 0);
+    for (size_t d = 0; d < topCount.size(); ++d) bucketBegin[d + 1] = bucketBegin[d] + topCount[d];
+    {
+        std::vector<uint32_t> offset(bucketBegin.begin(), bucketBegin.end() - 1);
+        for (uint32_t i = 0; i < n; ++i) other[offset[layout.topDigit(keys[i])]++] = keys[i];
+    }
+    for (size_t d = 0; d < topCount.size(); ++d) {
+        const uint32_t b = bucketBegin[d], count = topCount[d];
+        if (count) sortBucket(other + b, keys + b, other + b, count, layout);
+    }
+    // The references in sorted order; the leaves copy them back into refs.
+    std::unique_ptr<PrimRef[]> sorted(new PrimRef[n]);
+    const uint64_t indexMask = layout.indexMask();
+    for (uint32_t i = 0; i < n; ++i) sorted[i] = refs[keys[i] & indexMask];
+
+    TreeWriter writer(keys, layout.indexBits, sorted.get(), refs, nodes, maxLeafSize);
+    SimdBoxNanSpreads rootBox;
+    result.root = writer.build(Range{0, n, 0}, rootBox);
+    result.nodeCount = writer.nodeCount();
+    return result;
+}
+
+}  // namespace vkas

@@ -1,0 +1,30 @@
+// What vkGetAccelerationStructureBuildSizesKHR reports: the format's largest structure for the inputs, and the
+// scratch memory a build of them uses (PrimRef[n] then temporary records[n], from the first 64-byte aligned
+// address of the scratch buffer).
+#pragma once
+
+#include <vulkan/vulkan_core.h>
+
+#include <cstddef>
+#include <cstdint>
+
+#include "engine/format/layout.hpp"
+
+namespace vkas {
+
+struct StructureSizes {
+    uint64_t structureSize;
+    uint64_t buildScratchSize;
+    uint64_t updateScratchSize;
+};
+
+// A safe upper bound for any build of `primitiveCount` primitives (or instances) in `geometryCount` geometries.
+StructureSizes structureSizes(format::StructureType type, uint32_t geometryCount, uint64_t primitiveCount,
+                              bool motion = false);
+
+constexpr uint64_t kScratchAlignment = 64;
+
+// The first kScratchAlignment-aligned byte of the build's scratch buffer, where the PrimRef array starts.
+std::byte* alignedScratch(const VkAccelerationStructureBuildGeometryInfoKHR& info);
+
+}  // namespace vkas

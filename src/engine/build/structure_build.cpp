@@ -1,0 +1,143 @@
+#include "engine/build/structure_build.hpp"
+
+#include <algorithm>
+#include <cstring>
+
+#include "engine/build/kinds/kind.hpp"
+#include "engine/build/refit.hpp"
+#include "engine/build/size_query.hpp"
+#include "engine/build/tree_builder.hpp"
+#include "engine/format/layout.hpp"
+#include "vkas/vkas_compat.h"
+#include "engine/format/sizes.hpp"
+#include "engine/input/build_inputs.hpp"
+#include "engine/util/parallel_for.hpp"
+
+namespace vkas {
+
+using namespace format;
+
+namespace {
+
+void writeHeader(std::byte* dst, StructureType type, VkGeometryTypeKHR primitiveType,
+                 const VkAccelerationStructureBuildGeometryInfoKHR& info, uint64_t primitiveCount,
+                 const BvhBuildResult& tree, uint32_t recordCount, const StructureLayout& layout) {
+    Header h;
+    std::memset(&h, 0, sizeof h);
+    h.magic = kMagic;
+    h.version = kVersion;
+    h.type = uint32_t(type);
+    h.buildFlags = info.flags;
+    h.usedSize = layout.end;
+    h.root = tree.root;
+    h.bounds[0] = tree.bounds.lower.x, h.bounds[1] = tree.bounds.lower.y, h.bounds[2] = tree.bounds.lower.z;
+    h.bounds[3] = tree.bounds.upper.x, h.bounds[4] = tree.bounds.upper.y, h.bounds[5] = tree.bounds.upper.z;
+    h.geometryCount = info.geometryCount;
+    h.primitiveCount = uint32_t(primitiveCount);
+    h.recordCount = recordCount;
+    h.nodeCount = tree.nodeCount;
+    h.geometryOffset = layout.geometryOffset;
+    h.nodeOffset = layout.nodeOffset;
+    h.recordOffset = layout.recordOffset;
+    h.primitiveType = primitiveType;
+    std::memcpy(dst, &h, sizeof h);
+}
+
+// Zeroes the alignment gaps between sections so that every byte of [0, usedSize) depends only on the inputs.
+void clearGaps(std::byte* dst, uint32_t geometryCount, uint64_t nodeCount, const StructureLayout& layout) {
+    uint64_t geometryEnd = layout.geometryOffset + uint64_t(geometryCount) * sizeof(GeometryDesc);
+    std::memset(dst + geometryEnd, 0, layout.nodeOffset - geometryEnd);
+    uint64_t nodeEnd = layout.nodeOffset + nodeCount * sizeof(Node);
+    std::memset(dst + nodeEnd, 0, layout.recordOffset - nodeEnd);
+}
+
+void writeGeometryDescs(std::byte* dst, const BuildJob& job) {
+    const auto& info = *job.info;
+    for (uint32_t g = 0; g < info.geometryCount; ++g) {
+        const auto& geom = buildGeometry(info, g);
+        GeometryDesc d;
+        std::memset(&d, 0, sizeof d);
+        d.geometryType = geom.geometryType;
+        d.flags = geom.flags;
+        d.primitiveCount = job.ranges[g].primitiveCount;
+        if (geom.geometryType == VK_GEOMETRY_TYPE_TRIANGLES_KHR) {
+            d.vertexFormat = geom.geometry.triangles.vertexFormat;
+            d.indexType = geom.geometry.triangles.indexType;
+            d.maxVertex = geom.geometry.triangles.maxVertex;
+            d.hasTransform = geom.geometry.triangles.transformData.hostAddress != nullptr;
+            // What an update must compare its index values against (VUID 03768).
+            if ((info.flags & VK_BUILD_ACCELERATION_STRUCTURE_ALLOW_UPDATE_BIT_KHR) &&
+                geom.geometry.triangles.indexType != VK_INDEX_TYPE_NONE_KHR)
+                d.indexHash = referencedIndexHash(geom.geometry.triangles, job.ranges[g]);
+        }
+        std::memcpy(dst + sizeof(Header) + g * sizeof(GeometryDesc), &d, sizeof d);
+    }
+}
+
+
+// The VkGeometryTypeKHR of the records. All geometries of a bottom-level structure have one type (VUID 03792):
+// geometry 0 names it; anything but AABBs, spheres and LSS is read as triangles.
+VkGeometryTypeKHR primitiveTypeOf(const VkAccelerationStructureBuildGeometryInfoKHR& info) {
+    if (info.type == VK_ACCELERATION_STRUCTURE_TYPE_TOP_LEVEL_KHR) return VK_GEOMETRY_TYPE_INSTANCES_KHR;
+    if (info.geometryCount != 0) {
+        const VkGeometryTypeKHR first = buildGeometry(info, 0).geometryType;
+        if (first == VK_GEOMETRY_TYPE_AABBS_KHR || first == VK_GEOMETRY_TYPE_SPHERES_NV ||
+            first == VK_GEOMETRY_TYPE_LINEAR_SWEPT_SPHERES_NV)
+            return first;
+    }
+    return VK_GEOMETRY_TYPE_TRIANGLES_KHR;
+}
+
+// The primitives (or instances) given to the build, inactive ones included: a top level has one geometry (VUID
+// 03790), whose instances count.
+uint64_t primitiveTotal(const BuildJob& job) {
+    const auto& info = *job.info;
+    if (info.type == VK_ACCELERATION_STRUCTURE_TYPE_TOP_LEVEL_KHR)
+        return info.geometryCount ? job.ranges[0].primitiveCount : 0;
+    uint64_t total = 0;
+    for (uint32_t g = 0; g < info.geometryCount; ++g) total += job.ranges[g].primitiveCount;
+    return total;
+}
+
+}  // namespace
+
+VkResult buildAccelerationStructure(const BuildJob& job) {
+    const auto& info = *job.info;
+    const StructureType type = info.type == VK_ACCELERATION_STRUCTURE_TYPE_TOP_LEVEL_KHR ? StructureType::TopLevel
+                                                                                       : StructureType::BottomLevel;
+    const uint64_t total = primitiveTotal(job);
+    const bool motion = usesMotionRecords(info);  // [NV-motion] MotionInstanceRecords / MotionTriangleRecords
+    if (maxStructureSize(type, info.geometryCount, total, motion) > job.dstSize) return VK_ERROR_UNKNOWN;
+
+    const VkGeometryTypeKHR primitiveType = primitiveTypeOf(info);
+    const PrimitiveKind& kind = primitiveKind(type == StructureType::TopLevel, primitiveType, motion);
+    const uint64_t kRecordSize = recordSize(type, motion);
+    // Scratch: PrimRef[total], then the gathered records in input order (build/size_query.hpp).
+    PrimRef* refs = nullptr;
+    std::byte* temp = nullptr;
+    if (total != 0) {
+        refs = reinterpret_cast<PrimRef*>(alignedScratch(info));
+        temp = reinterpret_cast<std::byte*>(refs + total);
+    }
+    const uint32_t n = total != 0 ? kind.gather(job, refs, temp) : 0;
+
+    const StructureLayout pre = structureLayout(type, info.geometryCount, 0, 0, motion);
+    auto* nodes = reinterpret_cast<Node*>(job.dst + pre.nodeOffset);
+    const BvhBuildResult tree = buildTree(refs, n, buildSettingsFor(maxLeafSize(type), info.flags), nodes, job.parallel);
+    const StructureLayout layout = structureLayout(type, info.geometryCount, tree.nodeCount, n, motion);
+    // The records in tree order: leaf ranges of refs name their temp slots.
+    std::byte* records = job.dst + layout.recordOffset;
+    constexpr uint32_t kCopyChunk = 65536;
+    parallelForChunks(n > 2 * kCopyChunk ? job.parallel : nullptr, n, kCopyChunk,
+                      [&](uint32_t, uint64_t begin, uint64_t end) {
+                          for (uint64_t i = begin; i < end; ++i)
+                              std::memcpy(records + i * kRecordSize, temp + uint64_t(refs[i].index) * kRecordSize,
+                                          kRecordSize);
+                      });
+    writeGeometryDescs(job.dst, job);
+    clearGaps(job.dst, info.geometryCount, tree.nodeCount, layout);
+    writeHeader(job.dst, type, primitiveType, info, total, tree, n, layout);
+    return VK_SUCCESS;
+}
+
+}  // namespace vkas

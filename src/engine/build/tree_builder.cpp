@@ -1,0 +1,25 @@
+#include "engine/build/tree_builder.hpp"
+
+#include <vulkan/vulkan_core.h>
+
+#include "engine/build/morton_builder.hpp"
+#include "engine/build/sah_builder.hpp"
+
+namespace vkas {
+
+BvhBuildSettings buildSettingsFor(uint32_t maxLeafSize, uint32_t buildFlags) {
+    BvhBuildSettings s{maxLeafSize};
+    if (buildFlags & VK_BUILD_ACCELERATION_STRUCTURE_PREFER_FAST_BUILD_BIT_KHR) s.morton = true;
+    if ((buildFlags & VK_BUILD_ACCELERATION_STRUCTURE_PREFER_FAST_TRACE_BIT_KHR) ||
+        maxLeafSize == format::kMaxInstancesPerLeaf)
+        s.fewBinsBelow = 0;
+    return s;
+}
+
+BvhBuildResult buildTree(PrimRef* refs, uint32_t n, const BvhBuildSettings& settings, format::Node* nodes,
+                         const ParallelFor* parallel) {
+    if (settings.morton) return buildMortonBvh(refs, n, settings.maxLeafSize, nodes, parallel);
+    return buildSahBvh(refs, n, settings, nodes, parallel);
+}
+
+}  // namespace vkas

@@ -1,0 +1,58 @@
+// The builder selector: every structure build hands its primitive boxes (PrimRefs) to buildTree, which picks the
+// builder the build flags ask for and writes 8-wide nodes. Both builders keep one output contract: refs reordered
+// so that leaves are ranges of them, nodes in preorder, at most maxWideNodeCount(n, maxLeafSize) of them
+// (format/sizes.hpp), depth at most format::kMaxTreeDepth, bytes independent of threading.
+//   - binned SAH (sah_builder.hpp): the default and PREFER_FAST_TRACE;
+//   - Morton codes (morton_builder.hpp): PREFER_FAST_BUILD.
+#pragma once
+
+#include <cstdint>
+
+#include "engine/format/layout.hpp"
+#include "engine/util/math.hpp"
+#include "engine/util/parallel_for.hpp"
+
+namespace vkas {
+
+// A primitive's bounds and its index into the build's record array. 32 bytes, lives in scratch memory.
+struct PrimRef {
+    float lower[3];
+    uint32_t index;
+    float upper[3];
+    uint32_t pad;
+};
+static_assert(sizeof(PrimRef) == 32);
+
+// The PrimRef of record `index` with box b.
+inline void setPrimRef(PrimRef& ref, uint32_t index, const Aabb& b) {
+    ref.lower[0] = b.lower.x, ref.lower[1] = b.lower.y, ref.lower[2] = b.lower.z;
+    ref.upper[0] = b.upper.x, ref.upper[1] = b.upper.y, ref.upper[2] = b.upper.z;
+    ref.index = index;
+    ref.pad = 0;
+}
+
+struct BvhBuildSettings {
+    uint32_t maxLeafSize;        // ranges of at most this many primitives become leaves
+    uint32_t binCount = 32;      // SAH bins per axis (at most 32)
+    uint32_t fewBinsBelow = 4096;  // ranges of fewer primitives get 8 bins (faster, about 1% more SAH cost); 0: never
+    bool largestAxisOnly = false;  // bin only along the axis of the largest extent (faster, coarser)
+    bool morton = false;  // build with the Morton-code builder (morton_builder.hpp) instead of the SAH
+};
+
+// The settings a build's flags ask for: PREFER_FAST_BUILD the Morton-code builder (several times faster, a somewhat
+// coarser tree); everything else the binned SAH, with 32 bins at every size for PREFER_FAST_TRACE and for top levels
+// (an instance costs a whole bottom-level traversal, and instance counts are small).
+BvhBuildSettings buildSettingsFor(uint32_t maxLeafSize, uint32_t buildFlags);
+
+struct BvhBuildResult {
+    format::ChildRef root = format::kEmptyRef;
+    uint32_t nodeCount = 0;
+    Aabb bounds;
+};
+
+// Builds over refs[0..n) (reordered in place) into nodes[0..nodeCount) with the builder `settings` names.
+// With `parallel`, the output is byte-identical to a build without it.
+BvhBuildResult buildTree(PrimRef* refs, uint32_t n, const BvhBuildSettings& settings, format::Node* nodes,
+                         const ParallelFor* parallel = nullptr);
+
+}  // namespace vkas

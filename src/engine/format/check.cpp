@@ -1,0 +1,213 @@
+#include "engine/format/check.hpp"
+
+#include <cstring>
+
+#include "engine/util/alongside.hpp"
+#include "engine/util/byte_io.hpp"
+#include <vector>
+
+#include <vulkan/vulkan_core.h>
+
+#include "vkas/vkas_compat.h"
+
+namespace vkas::format {
+
+namespace {
+
+CheckResult corrupt(const char* reason) { return {CheckStatus::Corrupt, reason}; }
+
+bool isBottomLevelType(uint32_t t) {
+    return t == VK_GEOMETRY_TYPE_TRIANGLES_KHR || t == VK_GEOMETRY_TYPE_AABBS_KHR ||
+           t == uint32_t(VK_GEOMETRY_TYPE_SPHERES_NV) || t == uint32_t(VK_GEOMETRY_TYPE_LINEAR_SWEPT_SPHERES_NV);
+}
+
+// Offset of geometryIndex in a bottom-level record; primitiveIndex follows it.
+size_t geometryIndexOffset(uint32_t primitiveType) {
+    switch (primitiveType) {
+        case VK_GEOMETRY_TYPE_AABBS_KHR: return offsetof(AabbRecord, geometryIndex);
+        case uint32_t(VK_GEOMETRY_TYPE_SPHERES_NV): return offsetof(SphereRecord, geometryIndex);
+        case uint32_t(VK_GEOMETRY_TYPE_LINEAR_SWEPT_SPHERES_NV): return offsetof(LssRecord, geometryIndex);
+        default: return offsetof(TriangleRecord, geometryIndex);  // also the base of a motion triangle record
+    }
+}
+
+// Checks one child reference; pushes internal nodes. Returns nullptr or the reason it is malformed.
+struct TreeWalk {
+    uint32_t nodeCount;
+    uint64_t recordCount;
+    std::vector<uint8_t> visited;
+    std::vector<std::pair<uint32_t, uint32_t>> stack;  // node index, depth
+    uint64_t nodesSeen = 0;
+    uint64_t recordsCovered = 0;
+
+    const char* visit(ChildRef ref, uint32_t depth) {
+        const uint64_t kind = ref >> kKindShift;
+        if (kind == 0) return ref == kEmptyRef ? nullptr : "an empty child slot has payload bits";
+        if (kind == kKindInternal) {
+            if ((ref & ~((kKindInternal << kKindShift) | 0xFFFF'FFFFull)) != 0) return "an internal reference has stray bits";
+            const uint32_t index = nodeIndex(ref);
+            if (index >= nodeCount) return "a child reference names a node outside the node array";
+            if (visited[index]) return "a node is reached twice (a cycle or a shared subtree)";
+            if (depth + 1 > kMaxTreeDepth) return "the tree is deeper than the traversal stack allows";
+            visited[index] = 1;
+            ++nodesSeen;
+            stack.emplace_back(index, depth + 1);
+            return nullptr;
+        }
+        if (kind == kKindLeaf) {
+            if ((ref >> 48) & 0x3FFFull) return "a leaf reference has stray bits";
+            const uint32_t count = leafCount(ref);
+            const uint64_t first = leafFirst(ref);
+            if (count == 0) return "a leaf holds no record";
+            if (first > recordCount || count > recordCount - first) return "a leaf names records outside the record array";
+            recordsCovered += count;
+            return nullptr;
+        }
+        return "a child reference has an unknown kind";
+    }
+};
+
+}  // namespace
+
+CheckResult checkBlock(const std::byte* block, uint64_t size) {
+    if (!block || size < sizeof(Header)) return corrupt("the block is shorter than its header");
+    Header h;
+    std::memcpy(&h, block, sizeof h);
+    if (h.magic != kMagic) return corrupt("the header's magic is not \"VKAS\"");
+    if (h.version != kVersion) return corrupt("the header's format version is not 1");
+    if (h.usedSize < sizeof(Header) || h.usedSize > size) return corrupt("usedSize is out of range");
+    const bool topLevel = h.type == uint32_t(StructureType::TopLevel);
+    if (!topLevel && h.type != uint32_t(StructureType::BottomLevel)) return corrupt("the structure type is unknown");
+    if (topLevel ? h.primitiveType != VK_GEOMETRY_TYPE_INSTANCES_KHR : !isBottomLevelType(h.primitiveType))
+        return corrupt("the primitive type does not fit the structure type");
+    // Sections: geometry table, nodes, records, in this order, inside [256, usedSize), aligned as the format says.
+    const uint64_t used = h.usedSize;
+    if (h.geometryOffset < sizeof(Header) || h.geometryOffset > used || h.geometryOffset % 8 != 0)
+        return corrupt("geometryOffset is out of range");
+    // In order before the sizes are subtracted (out of order, the differences below would wrap and pass).
+    if (h.nodeOffset < h.geometryOffset || h.recordOffset < h.nodeOffset)
+        return corrupt("the sections are not in the order geometry table, nodes, records");
+    if (h.nodeOffset > used || h.nodeOffset % 64 != 0 ||
+        uint64_t(h.geometryCount) * sizeof(GeometryDesc) > h.nodeOffset - h.geometryOffset)
+        return corrupt("the geometry table does not fit before the nodes");
+    if (h.recordOffset > used || h.recordOffset % 64 != 0 ||
+        uint64_t(h.nodeCount) * sizeof(Node) > h.recordOffset - h.nodeOffset)
+        return corrupt("the node array does not fit before the records");
+    const uint64_t stride = recordSize(h.type, h.primitiveType, h.buildFlags);
+    if (uint64_t(h.recordCount) * stride > used - h.recordOffset) return corrupt("the records do not fit in usedSize");
+    if (h.recordCount > h.primitiveCount) return corrupt("more records than primitives");
+    // Geometry table.
+    for (uint32_t g = 0; g < h.geometryCount; ++g) {
+        const uint32_t type = load32(block + h.geometryOffset + uint64_t(g) * sizeof(GeometryDesc));
+        if (topLevel ? type != VK_GEOMETRY_TYPE_INSTANCES_KHR : type != h.primitiveType)
+            return corrupt("a geometry's type does not match the structure's primitive type");
+    }
+    // Tree: every node reached exactly once from the root, no deeper than the traversal stack allows, every leaf
+    // inside the record array, the leaves covering recordCount records.
+    if (h.root == kEmptyRef) {
+        if (h.nodeCount != 0 || h.recordCount != 0) return corrupt("an empty root with nodes or records");
+    } else {
+        TreeWalk walk{h.nodeCount, h.recordCount, std::vector<uint8_t>(h.nodeCount, 0), {}};
+        if (const char* why = walk.visit(h.root, 0)) return corrupt(why);
+        while (!walk.stack.empty()) {
+            const auto [index, depth] = walk.stack.back();
+            walk.stack.pop_back();
+            const std::byte* node = block + h.nodeOffset + uint64_t(index) * sizeof(Node);
+            for (uint32_t c = 0; c < kNodeWidth; ++c) {
+                const ChildRef ref = load64(node + offsetof(Node, child) + 8 * c);
+                if (const char* why = walk.visit(ref, depth)) return corrupt(why);
+            }
+        }
+        if (walk.nodesSeen != h.nodeCount) return corrupt("some nodes are not reachable from the root");
+        if (walk.recordsCovered != h.recordCount) return corrupt("the leaves do not cover the records exactly");
+    }
+    // Records: indices in range.
+    const std::byte* records = block + h.recordOffset;
+    if (topLevel) {
+        const bool motion = stride == sizeof(MotionInstanceRecord);
+        for (uint64_t r = 0; r < h.recordCount; ++r) {
+            const std::byte* rec = records + r * stride;
+            if (load32(rec + serial::kInstanceIdOffset) >= h.primitiveCount)
+                return corrupt("an instance record's instanceId is out of range");
+            const uint32_t motionType = load32(rec + serial::kInstanceMotionTypeOffset);
+            if (motion ? motionType > 2 : motionType != 0) return corrupt("an instance record's motion type is invalid");
+        }
+    } else {
+        const size_t at = geometryIndexOffset(h.primitiveType);
+        for (uint64_t r = 0; r < h.recordCount; ++r) {
+            const std::byte* rec = records + r * stride;
+            const uint32_t geometry = load32(rec + at);
+            if (geometry >= h.geometryCount) return corrupt("a record's geometryIndex is out of range");
+            const uint32_t primitives =
+                load32(block + h.geometryOffset + uint64_t(geometry) * sizeof(GeometryDesc) +
+                       offsetof(GeometryDesc, primitiveCount));
+            if (load32(rec + at + 4) >= primitives) return corrupt("a record's primitiveIndex is out of range");
+        }
+    }
+    return {};
+}
+
+CheckResult checkSerializedLayout(const std::byte* data, uint64_t size, serial::SerializedView* view) {
+    using namespace serial;
+    if (!data || size < kHeaderSize) return corrupt("the blob is shorter than the serialized header");
+    SerializedView v;
+    v.layout = layoutOf(reinterpret_cast<const uint8_t*>(data));
+    if (v.layout == Layout::None)
+        return {CheckStatus::Incompatible, "the driver or compatibility UUID is not one vkas loads"};
+    v.data = data;
+    v.serializedSize = load64(data + kSerializedSizeOffset);
+    v.deserializedSize = load64(data + kDeserializedSizeOffset);
+    const uint64_t count = load64(data + kHandleCountOffset);
+    if (v.serializedSize < kHeaderSize || v.serializedSize > size) return corrupt("the serialized size is out of range");
+    // [OMM-KHR] A bottom level may announce its (here: zero) blocks as 0xFFFFFFFF in the high word.
+    const bool blockForm = (count >> 32) == 0xFFFF'FFFFull;
+    if (blockForm && (count & 0xFFFF'FFFFull) != 0) return corrupt("the blob has opacity-micromap blocks");
+    v.handleCount = blockForm ? 0 : count;
+    const uint64_t prefix = opaquePrefixSize(v.layout);
+    if (v.handleCount > (v.serializedSize - kHeaderSize) / 8) return corrupt("the handle count is out of range");
+    if (v.serializedSize - kHeaderSize - 8 * v.handleCount < prefix)
+        return corrupt("the serialized size leaves no room for the integrity hash");
+    // The sizes must agree with each other before anything past the header is read: the header's serialized size
+    // is the extent the application vouches for, so a changed size field must be caught from the header alone.
+    if (v.serializedSize - kHeaderSize - 8 * v.handleCount - prefix != v.deserializedSize)
+        return corrupt("the serialized size does not match the deserialized size and handle count");
+    if (v.deserializedSize < sizeof(Header)) return corrupt("the deserialized size is shorter than a block header");
+    v.handles = data + kHandlesOffset;
+    if (v.layout == Layout::V2) v.storedHash = load64(v.handles + 8 * v.handleCount);
+    v.block = v.handles + 8 * v.handleCount + prefix;
+    if (view) *view = v;
+    return {};
+}
+
+CheckResult checkLoadedBlock(const serial::SerializedView& view, const std::byte* block) {
+    const CheckResult r = checkBlock(block, view.deserializedSize);
+    if (!r.ok()) return r;
+    Header h;
+    std::memcpy(&h, block, sizeof h);
+    if (h.usedSize != view.deserializedSize) return corrupt("the deserialized size is not the block's usedSize");
+    const bool topLevel = h.type == uint32_t(StructureType::TopLevel);
+    const bool blockForm = (load64(view.data + serial::kHandleCountOffset) >> 32) == 0xFFFF'FFFFull;
+    if (topLevel ? (blockForm || view.handleCount != h.primitiveCount) : view.handleCount != 0)
+        return corrupt("the handle count does not match the structure");
+    return {};
+}
+
+CheckResult checkSerialized(const std::byte* data, uint64_t size, serial::SerializedView* view) {
+    serial::SerializedView v;
+    const CheckResult layout = checkSerializedLayout(data, size, &v);
+    if (!layout.ok()) return layout;
+    // Serialized layout 2: any change of a hashed byte (everything but the handle array) is caught by the hash. It is
+    // computed beside the structural checks (on a thread of its own for a large blob); both must pass.
+    bool hashMatches = true;
+    CheckResult block;
+    alongside(
+        v.layout == serial::Layout::V2 && v.deserializedSize >= serial::kHashAlongsideBytes,
+        [&] { hashMatches = v.layout != serial::Layout::V2 || serial::integrityHash(v) == v.storedHash; },
+        [&] { block = checkLoadedBlock(v, v.block); });
+    if (!hashMatches) return corrupt("the integrity hash does not match the data (the blob was changed)");
+    if (!block.ok()) return block;
+    if (view) *view = v;
+    return {};
+}
+
+}  // namespace vkas::format

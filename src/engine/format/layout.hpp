@@ -1,0 +1,226 @@
+// The in-memory format of a vkas acceleration structure (docs/FORMAT.md describes it byte by byte).
+//
+// A structure is one contiguous block at the start of [offset, offset + size) of its buffer:
+//   Header | GeometryDesc[geometryCount] | Node[nodeCount] | TriangleRecord[], AabbRecord[] or InstanceRecord[]
+// Every offset inside is relative to the start of the block, so a byte copy of the first usedSize bytes is a
+// valid clone. Nodes are 8 wide with their child boxes stored as structure-of-arrays for SIMD box tests.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+namespace vkas::format {
+
+constexpr uint32_t kMagic = 0x5341'4B56u;  // "VKAS" read as little-endian bytes
+constexpr uint32_t kVersion = 1;
+constexpr uint32_t kNodeWidth = 8;
+constexpr uint32_t kMaxPrimitivesPerLeaf = 4;  // triangles or AABBs
+constexpr uint32_t kMaxInstancesPerLeaf = 1;
+// Binary split depth after which the builder stops using the SAH and halves ranges instead. It bounds the tree
+// depth, which bounds the traversal stack a ray query carries (see traversal.hpp).
+constexpr uint32_t kSahDepthLimit = 32;
+constexpr uint32_t kMaxTreeDepth = kSahDepthLimit + 32;
+
+enum class StructureType : uint32_t { TopLevel = 0, BottomLevel = 1 };  // VkAccelerationStructureTypeKHR values
+
+// A child reference. 0 is an empty slot. Bits 62-63 give the kind.
+//   internal: kind 1, bits 0-31 node index
+//   leaf:     kind 2, bits 0-39 first record index, bits 40-47 record count (1-255)
+using ChildRef = uint64_t;
+constexpr ChildRef kEmptyRef = 0;
+constexpr uint64_t kKindShift = 62;
+constexpr uint64_t kKindInternal = 1;
+constexpr uint64_t kKindLeaf = 2;
+
+constexpr ChildRef makeInternalRef(uint32_t nodeIndex) { return (kKindInternal << kKindShift) | nodeIndex; }
+constexpr ChildRef makeLeafRef(uint64_t first, uint32_t count) {
+    return (kKindLeaf << kKindShift) | (uint64_t(count) << 40) | (first & 0xFF'FFFF'FFFFull);
+}
+constexpr bool isInternal(ChildRef r) { return (r >> kKindShift) == kKindInternal; }
+constexpr bool isLeaf(ChildRef r) { return (r >> kKindShift) == kKindLeaf; }
+constexpr uint32_t nodeIndex(ChildRef r) { return uint32_t(r); }
+constexpr uint64_t leafFirst(ChildRef r) { return r & 0xFF'FFFF'FFFFull; }
+constexpr uint32_t leafCount(ChildRef r) { return uint32_t((r >> 40) & 0xFF); }
+
+struct Header {
+    uint32_t magic;
+    uint32_t version;
+    uint32_t type;        // StructureType
+    uint32_t buildFlags;  // VkBuildAccelerationStructureFlagsKHR of the last build
+    uint64_t usedSize;    // bytes from the start of the block that the structure occupies
+    ChildRef root;
+    float bounds[6];  // lower xyz, upper xyz of everything in the tree (+inf/-inf when empty)
+    uint32_t geometryCount;
+    uint32_t primitiveCount;  // primitives (or instances) given to the build, inactive ones included
+    uint32_t recordCount;     // records stored in the tree
+    uint32_t nodeCount;
+    uint64_t geometryOffset;
+    uint64_t nodeOffset;
+    uint64_t recordOffset;
+    // VkGeometryTypeKHR of the records: TRIANGLES (0), AABBS (1), INSTANCES (2), SPHERES_NV (1000429004) or
+    // LINEAR_SWEPT_SPHERES_NV (1000429005). A bottom-level structure holds
+    // one geometry type only (VUID 03792), so traversal branches on it once per instance, not per record.
+    uint32_t primitiveType;
+    uint8_t reserved[256 - 100];
+};
+static_assert(sizeof(Header) == 256);
+
+// Per-geometry facts of the last build: flags for traversal, the rest for update validation.
+struct GeometryDesc {
+    uint32_t geometryType;  // VkGeometryTypeKHR
+    uint32_t flags;         // VkGeometryFlagsKHR
+    uint32_t primitiveCount;
+    uint32_t vertexFormat;  // triangles: VkFormat
+    uint32_t indexType;     // triangles: VkIndexType
+    uint32_t maxVertex;
+    uint32_t hasTransform;
+    // Indexed triangles of an ALLOW_UPDATE build: a hash of the index values the build read (refit.hpp,
+    // referencedIndexHash), so an update can check VUID 03768 without a copy of the indices. Otherwise 0.
+    uint32_t indexHash;
+};
+static_assert(sizeof(GeometryDesc) == 32);
+
+struct alignas(64) Node {
+    float lowerX[kNodeWidth], upperX[kNodeWidth];
+    float lowerY[kNodeWidth], upperY[kNodeWidth];
+    float lowerZ[kNodeWidth], upperZ[kNodeWidth];
+    ChildRef child[kNodeWidth];
+};
+static_assert(sizeof(Node) == 256);
+
+// Triangle record flags.
+constexpr uint32_t kTriangleOpaque = 0x1;      // the geometry's OPAQUE flag
+constexpr uint32_t kTriangleDegenerate = 0x2;  // kept for updates, never hit
+constexpr uint32_t kTriangleNoDuplicateAnyHit = 0x4;
+// AABB record flags: the same bits as for triangles.
+constexpr uint32_t kAabbOpaque = kTriangleOpaque;
+constexpr uint32_t kAabbNoDuplicateAnyHit = kTriangleNoDuplicateAnyHit;
+
+struct TriangleRecord {
+    float v[3][3];  // object-space positions after the geometry transform, application vertex order
+    uint32_t geometryIndex;
+    uint32_t primitiveIndex;
+    uint32_t flags;
+};
+static_assert(sizeof(TriangleRecord) == 48);
+
+// One active VkAabbPositionsKHR, as given (already floats: the tree bounds it exactly).
+struct AabbRecord {
+    float lower[3];  // minX, minY, minZ
+    float upper[3];  // maxX, maxY, maxZ
+    uint32_t geometryIndex;
+    uint32_t primitiveIndex;
+    uint32_t flags;
+    uint32_t reserved[3];
+};
+// Same size as a triangle record, so the build-size formula holds for both kinds of bottom-level structure.
+static_assert(sizeof(AabbRecord) == sizeof(TriangleRecord));
+
+// [NV-LSS] Sphere and linear-swept-sphere record flags: bits 0-2 as for triangles, plus the end caps of an LSS.
+constexpr uint32_t kSweptOpaque = kTriangleOpaque;
+// Zero radius (LSS: both radii zero), kept only by ALLOW_UPDATE builds so that an update can give it a radius;
+// also set by an invalid update. Never hit; re-decided by every refit.
+constexpr uint32_t kSweptDegenerate = kTriangleDegenerate;
+constexpr uint32_t kSweptNoDuplicateAnyHit = kTriangleNoDuplicateAnyHit;
+constexpr uint32_t kLssCap0 = 0x10;  // the sphere at the first endpoint (u = 0) is a surface of the primitive
+constexpr uint32_t kLssCap1 = 0x20;  // the sphere at the second endpoint (u = 1)
+
+// One active sphere (VK_GEOMETRY_TYPE_SPHERES_NV): the decoded position (rounded to float) and radius.
+struct SphereRecord {
+    float center[3];
+    float radius;
+    uint32_t geometryIndex;
+    uint32_t primitiveIndex;
+    uint32_t flags;
+    uint32_t reserved[5];
+};
+static_assert(sizeof(SphereRecord) == sizeof(TriangleRecord));
+
+// One active linear swept sphere (VK_GEOMETRY_TYPE_LINEAR_SWEPT_SPHERES_NV): endpoints and radii in application
+// order, and which end caps the end-caps mode leaves on.
+struct LssRecord {
+    float p0[3];
+    float r0;
+    float p1[3];
+    float r1;
+    uint32_t geometryIndex;
+    uint32_t primitiveIndex;
+    uint32_t flags;
+    uint32_t reserved;
+};
+static_assert(sizeof(LssRecord) == sizeof(TriangleRecord));
+
+struct InstanceRecord {
+    float objectToWorld[3][4];
+    float worldToObject[3][4];
+    uint32_t customIndexAndMask;  // bits 0-23 custom index, 24-31 mask (as in VkAccelerationStructureInstanceKHR)
+    uint32_t sbtOffsetAndFlags;   // bits 0-23 SBT record offset, 24-31 VkGeometryInstanceFlagsKHR
+    uint64_t reference;           // the VkAccelerationStructureKHR handle of the bottom-level structure
+    uint32_t instanceId;          // index in the instance array given to the build
+    uint32_t motionType;          // motion top level: VkAccelerationStructureMotionInstanceTypeNV (0 static); else 0
+    uint32_t reserved[2];
+};
+static_assert(sizeof(InstanceRecord) == 128);
+
+// [NV-motion] Records of structures built with VK_BUILD_ACCELERATION_STRUCTURE_MOTION_BIT_NV (buildFlags in the
+// header tells them apart; traversal branches once per structure). See docs/FORMAT.md and engine/motion.hpp.
+//
+// A motion top level stores one MotionInstanceRecord per active instance. `base` is an ordinary instance record:
+// for a static motion instance its transforms are the instance's; for matrix and SRT motion they are the
+// transform at time 0 and its inverse (informative), and `base.motionType` selects how `motion` interpolates:
+//   MATRIX (1): motion[0..11] transformT0, motion[12..23] transformT1 (3x4 row-major), the rest zero
+//   SRT (2):    motion[0..15] transformT0, motion[16..31] transformT1 (VkSRTDataNV order)
+struct MotionInstanceRecord {
+    InstanceRecord base;
+    float motion[32];
+};
+static_assert(sizeof(MotionInstanceRecord) == 256);
+
+// A motion bottom level of triangles stores MotionTriangleRecords: `base` holds the time-0 positions (flags has
+// kTriangleMotion) and v1 the time-1 positions; traversal interpolates linearly.
+constexpr uint32_t kTriangleMotion = 0x8;
+struct MotionTriangleRecord {
+    TriangleRecord base;
+    float v1[3][3];
+    uint32_t reserved[3];
+};
+static_assert(sizeof(MotionTriangleRecord) == 96);
+
+inline const Header* header(const std::byte* base) { return reinterpret_cast<const Header*>(base); }
+inline const GeometryDesc* geometries(const std::byte* base) {
+    return reinterpret_cast<const GeometryDesc*>(base + header(base)->geometryOffset);
+}
+inline const Node* nodes(const std::byte* base) {
+    return reinterpret_cast<const Node*>(base + header(base)->nodeOffset);
+}
+inline const TriangleRecord* triangles(const std::byte* base) {
+    return reinterpret_cast<const TriangleRecord*>(base + header(base)->recordOffset);
+}
+inline const AabbRecord* aabbs(const std::byte* base) {
+    return reinterpret_cast<const AabbRecord*>(base + header(base)->recordOffset);
+}
+inline const SphereRecord* spheres(const std::byte* base) {
+    return reinterpret_cast<const SphereRecord*>(base + header(base)->recordOffset);
+}
+inline const LssRecord* lssRecords(const std::byte* base) {
+    return reinterpret_cast<const LssRecord*>(base + header(base)->recordOffset);
+}
+inline const InstanceRecord* instances(const std::byte* base) {
+    return reinterpret_cast<const InstanceRecord*>(base + header(base)->recordOffset);
+}
+inline const MotionInstanceRecord* motionInstances(const std::byte* base) {
+    return reinterpret_cast<const MotionInstanceRecord*>(base + header(base)->recordOffset);
+}
+inline const MotionTriangleRecord* motionTriangles(const std::byte* base) {
+    return reinterpret_cast<const MotionTriangleRecord*>(base + header(base)->recordOffset);
+}
+
+}  // namespace vkas::format
+
+namespace vkas {
+
+// Turns an instance's accelerationStructureReference into the block of the bottom-level structure it names, or
+// nullptr when it names none. Supplied by the API layer, which owns the handles; builds, refits and traversal use it.
+using BlasResolver = const std::byte* (*)(uint64_t reference);
+
+}  // namespace vkas

@@ -1,0 +1,36 @@
+#include "engine/format/sizes.hpp"
+
+namespace vkas {
+
+namespace {
+constexpr uint64_t alignUp(uint64_t v, uint64_t a) { return (v + a - 1) / a * a; }
+}  // namespace
+
+uint32_t maxLeafSize(format::StructureType type) {
+    return type == format::StructureType::TopLevel ? format::kMaxInstancesPerLeaf : format::kMaxPrimitivesPerLeaf;
+}
+
+StructureLayout structureLayout(format::StructureType type, uint32_t geometryCount, uint64_t nodeCount,
+                                uint64_t recordCount, bool motion) {
+    StructureLayout l;
+    l.geometryOffset = sizeof(format::Header);
+    l.nodeOffset = alignUp(l.geometryOffset + uint64_t(geometryCount) * sizeof(format::GeometryDesc), 64);
+    l.recordOffset = alignUp(l.nodeOffset + nodeCount * sizeof(format::Node), 64);
+    l.end = l.recordOffset + recordCount * recordSize(type, motion);
+    return l;
+}
+
+uint64_t maxWideNodeCount(uint64_t n, uint32_t maxLeafSize) {
+    if (n <= maxLeafSize) return 0;
+    // Nodes with fewer than 8 children have only leaf children and hold > maxLeafSize primitives, so there are
+    // at most n / (maxLeafSize + 1) of them; the rest have 8 children: 7 * full + partial <= leaves - 1.
+    uint64_t partial = n / (uint64_t(maxLeafSize) + 1);
+    return partial + (n - 1) / 7 + 1;
+}
+
+uint64_t maxStructureSize(format::StructureType type, uint32_t geometryCount, uint64_t primitiveCount, bool motion) {
+    const uint64_t nodes = maxWideNodeCount(primitiveCount, maxLeafSize(type));
+    return structureLayout(type, geometryCount, nodes, primitiveCount, motion).end;
+}
+
+}  // namespace vkas

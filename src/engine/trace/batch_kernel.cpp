@@ -1,0 +1,80 @@
+#include "engine/trace/batch_kernel.hpp"
+
+#include <vulkan/vulkan_core.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+
+#include "engine/format/motion.hpp"
+#include "engine/trace/hit_rules.hpp"
+#include "engine/trace/node_test_avx2.hpp"
+#include "engine/trace/node_test_sse.hpp"
+#include "engine/trace/ray.hpp"
+#include "engine/trace/traversal_steps.hpp"
+#include "engine/trace/triangle_test.hpp"
+
+#if defined(__x86_64__)
+#include <immintrin.h>
+#define VKAS_KERNEL_AVX2 VKAS_NODE_TEST_AVX2
+#endif
+
+namespace vkas {
+
+namespace {
+
+using format::ChildRef;
+
+// The baseline kernel: the node test the ray query uses (SSE2, 4 lanes twice).
+namespace baseline {
+inline uint32_t childEntries(const format::Node& node, const ShearedRay& r, float tMin, float tMax,
+                             float out[format::kNodeWidth]) {
+    return childEntryDistances(node, r, tMin, tMax, out);
+}
+#include "engine/trace/batch_kernel_body.hpp"
+}  // namespace baseline
+
+#if VKAS_KERNEL_AVX2
+// The AVX2 kernel: the same body compiled for AVX2 (no FMA: -ffp-contract=off and no FMA target keep the rounding
+// of every operation), with the 8-lane node test (node_test_avx2.hpp).
+#if defined(__clang__)
+#pragma clang attribute push(__attribute__((target("avx2"))), apply_to = function)
+#else
+#pragma GCC push_options
+#pragma GCC target("avx2")
+#endif
+namespace avx2 {
+inline uint32_t childEntries(const format::Node& node, const ShearedRay& r, float tMin, float tMax,
+                             float out[format::kNodeWidth]) {
+    return childEntryDistancesAvx2(node, r, tMin, tMax, out);
+}
+#include "engine/trace/batch_kernel_body.hpp"
+}  // namespace avx2
+#if defined(__clang__)
+#pragma clang attribute pop
+#else
+#pragma GCC pop_options
+#endif
+#endif
+
+using KernelFn = bool (*)(const std::byte*, BlasResolver, const KernelRay&, KernelScratch&, QueryHit&);
+
+// AVX2 where the CPU has it, unless VKAS_TRACE_KERNEL=sse2 asks for the baseline (tests run both).
+KernelFn chooseKernel() {
+#if VKAS_KERNEL_AVX2
+    const char* forced = std::getenv("VKAS_TRACE_KERNEL");
+    const bool baselineOnly = forced && std::strcmp(forced, "sse2") == 0;
+    if (!baselineOnly && __builtin_cpu_supports("avx2")) return avx2::traceWith;
+#endif
+    return baseline::traceWith;
+}
+
+}  // namespace
+
+bool traceKernel(const std::byte* topLevel, BlasResolver resolver, const KernelRay& ray, KernelScratch& scratch,
+                 QueryHit& committed) {
+    static const KernelFn kernel = chooseKernel();
+    return kernel(topLevel, resolver, ray, scratch, committed);
+}
+
+}  // namespace vkas

@@ -1,0 +1,43 @@
+// The batch traversal kernel: one ray traced to completion in a tight loop, for vkasTraceRays.
+//
+// It gives exactly what the ray query's state machine (traversal.hpp) gives for queryRunToCompletion: every
+// non-opaque triangle confirmed, AABB candidates dropped, the same children visited in the same order (the same node
+// test, engine/node_intersect.hpp) and the same triangle test, so the same hit, ties included. What it saves is the
+// resumable machinery: the ray and the stack stay in registers and on the kernel's own stack, a hit child is entered
+// without a push and pop, a leaf's triangles are screened four at a time with SIMD before the exact scalar test, and
+// the last bottom-level lookup is cached. It covers top levels without motion over bottom levels of triangles without
+// motion (AABB bottom levels contribute nothing here); anything else is reported as unsupported and the caller
+// runs the ray query instead.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+#include "engine/trace/ray_query.hpp"
+
+namespace vkas {
+
+struct KernelRay {
+    float origin[3];
+    float direction[3];
+    float tMin, tMax;
+    uint32_t flags;  // SPIR-V ray flags
+    uint32_t cullMask;
+};
+
+// Per-thread working memory, reused from ray to ray: the stack and the last bottom-level lookup (valid for the whole
+// batch: the application may not destroy a structure while a command uses it).
+struct KernelScratch {
+    uint64_t cachedReference = 0;
+    const std::byte* cachedBlas = nullptr;
+    format::ChildRef stackRef[kStackCapacity];
+    float stackDist[kStackCapacity];
+};
+
+// Traces `ray` through `topLevel` (a valid top-level block, or null: every ray misses) into `committed` (a
+// QueryHit as queryRunToCompletion leaves RayQueryState::committed; without a hit only type and t are written). Returns false, with `committed` unspecified,
+// when the ray meets something the kernel does not handle (a motion top level, motion triangles, spheres, LSS).
+bool traceKernel(const std::byte* topLevel, BlasResolver resolver, const KernelRay& ray, KernelScratch& scratch,
+                 QueryHit& committed);
+
+}  // namespace vkas

@@ -1,0 +1,135 @@
+// The rules that decide whether a primitive the ray meets becomes a hit, written once for the ray query's state
+// machine (ray_query.cpp) and the batch kernel (batch_kernel_body.hpp): ray and instance flag bits, the instance
+// mask, opacity in the spec's order, the whole triangle decision, and the hit record both paths fill.
+#pragma once
+
+#include <cstdint>
+
+#include "engine/format/layout.hpp"
+#include "engine/trace/ray.hpp"
+#include "engine/trace/triangle_test.hpp"
+
+namespace vkas {
+
+constexpr uint32_t kRayOpaque = 0x1, kRayNoOpaque = 0x2, kRayTerminateOnFirstHit = 0x4;
+constexpr uint32_t kRayCullBack = 0x10, kRayCullFront = 0x20, kRayCullOpaque = 0x40, kRayCullNoOpaque = 0x80;
+constexpr uint32_t kRaySkipTriangles = 0x100, kRaySkipAabbs = 0x200;
+constexpr uint32_t kInstanceCullDisable = 0x1, kInstanceFlipFacing = 0x2, kInstanceForceOpaque = 0x4,
+                   kInstanceForceNoOpaque = 0x8;
+
+// Opacity in the spec's order: the geometry's OPAQUE flag, overridden by the instance's FORCE_* flags,
+// overridden by the ray's Opaque / NoOpaque flags.
+inline bool resolveOpacity(bool geometryOpaque, uint32_t instanceFlags, uint32_t rayFlags) {
+    bool opaque = geometryOpaque;
+    if (instanceFlags & kInstanceForceOpaque)
+        opaque = true;
+    else if (instanceFlags & kInstanceForceNoOpaque)
+        opaque = false;
+    if (rayFlags & kRayOpaque)
+        opaque = true;
+    else if (rayFlags & kRayNoOpaque)
+        opaque = false;
+    return opaque;
+}
+
+inline bool culledByOpacity(bool opaque, uint32_t rayFlags) {
+    return opaque ? (rayFlags & kRayCullOpaque) != 0 : (rayFlags & kRayCullNoOpaque) != 0;
+}
+
+// The instance mask test: "the instance is visible to the ray when (cullMask & instance mask) != 0".
+inline bool instanceVisible(const format::InstanceRecord& inst, uint32_t cullMask) {
+    return ((inst.customIndexAndMask >> 24) & cullMask & 0xFFu) != 0;
+}
+
+constexpr uint32_t kCommittedNone = 0, kCommittedTriangle = 1, kCommittedGenerated = 2;
+constexpr uint32_t kCandidateTriangle = 0, kCandidateAabb = 1;
+
+struct QueryHit {
+    uint32_t type;
+    float t;  // AABB candidates: where the ray enters the box (not less than tMin); the spec leaves it undefined
+    float barycentrics[2];
+    bool frontFace;
+    bool aabbOpaque;
+    const format::InstanceRecord* instance;  // null for no hit
+    const format::TriangleRecord* triangle;  // triangle candidates and hits
+    const format::AabbRecord* aabb;          // AABB candidates and generated hits
+    // [NV-LSS] Sphere and LSS candidates and hits. They report the triangle intersection types (as SPIR-V does)
+    // and are told apart by these pointers (OpRayQueryIsSphereHitNV / OpRayQueryIsLSSHitNV).
+    const format::SphereRecord* sphere;
+    const format::LssRecord* lss;
+    float lssHitValue;  // u along the LSS (0 or 1 on an end cap); 0 for everything else
+    float objectOrigin[3];
+    float objectDirection[3];
+};
+
+// Geometry and primitive index of a hit, -1 without one.
+inline int32_t hitGeometryIndex(const QueryHit& h) {
+    return h.triangle ? int32_t(h.triangle->geometryIndex)
+           : h.aabb   ? int32_t(h.aabb->geometryIndex)
+           : h.sphere ? int32_t(h.sphere->geometryIndex)
+           : h.lss    ? int32_t(h.lss->geometryIndex)
+                      : -1;
+}
+inline int32_t hitPrimitiveIndex(const QueryHit& h) {
+    return h.triangle ? int32_t(h.triangle->primitiveIndex)
+           : h.aabb   ? int32_t(h.aabb->primitiveIndex)
+           : h.sphere ? int32_t(h.sphere->primitiveIndex)
+           : h.lss    ? int32_t(h.lss->primitiveIndex)
+                      : -1;
+}
+
+// What a triangle test decides before the hit is recorded: the intersection (t, barycentrics), the facing after the
+// instance's FLIP_FACING, and the resolved opacity.
+struct TriangleCandidate {
+    TriangleHit hit;
+    bool frontFace;
+    bool opaque;
+};
+
+// Whether the ray, in [tMin, tMax] (exclusive for triangles), meets triangle `tri` at positions `v` (the record's
+// own, or [NV-motion] the ones interpolated at the ray time) as a candidate: not degenerate, covered (watertight
+// test), not culled by facing (unless the instance disables culling) nor by opacity.
+inline bool triangleCandidate(const ShearedRay& r, float tMin, float tMax, uint32_t rayFlags, uint32_t instanceFlags,
+                              const format::TriangleRecord& tri, const float (*v)[3], TriangleCandidate& out) {
+    if (tri.flags & format::kTriangleDegenerate) return false;
+    if (!intersectTriangle(r, v[0], v[1], v[2], out.hit)) return false;
+    if (!(out.hit.t > tMin && out.hit.t < tMax)) return false;  // strict for triangles
+    bool front = out.hit.frontFace;
+    if (instanceFlags & kInstanceFlipFacing) front = !front;
+    if (!(instanceFlags & kInstanceCullDisable)) {
+        if ((rayFlags & kRayCullBack) && !front) return false;
+        if ((rayFlags & kRayCullFront) && front) return false;
+    }
+    out.frontFace = front;
+    out.opaque = resolveOpacity((tri.flags & format::kTriangleOpaque) != 0, instanceFlags, rayFlags);
+    return !culledByOpacity(out.opaque, rayFlags);
+}
+
+// Starts hit record `h` of `type` at t on `instance`, seen along the object-space ray `r`: no primitive yet, no
+// barycentrics or facing. Callers then name the primitive and fill what its kind defines.
+inline void startHit(QueryHit& h, uint32_t type, float t, const format::InstanceRecord* instance, const ShearedRay& r) {
+    h.type = type;
+    h.t = t;
+    h.barycentrics[0] = h.barycentrics[1] = 0.0f;
+    h.frontFace = false;
+    h.aabbOpaque = false;
+    h.instance = instance;
+    h.triangle = nullptr;
+    h.aabb = nullptr;
+    h.sphere = nullptr;
+    h.lss = nullptr;
+    h.lssHitValue = 0.0f;
+    for (int i = 0; i < 3; ++i) h.objectOrigin[i] = r.org[i], h.objectDirection[i] = r.dir[i];
+}
+
+// Hit record `h` of `type` for the triangle candidate `c` of `tri`.
+inline void setTriangleHit(QueryHit& h, uint32_t type, const TriangleCandidate& c, const format::TriangleRecord& tri,
+                           const format::InstanceRecord* instance, const ShearedRay& r) {
+    startHit(h, type, c.hit.t, instance, r);
+    h.barycentrics[0] = c.hit.b;
+    h.barycentrics[1] = c.hit.c;
+    h.frontFace = c.frontFace;
+    h.triangle = &tri;
+}
+
+}  // namespace vkas

@@ -1,0 +1,326 @@
+#include "engine/trace/ray_query.hpp"
+
+#include <cmath>
+#include <cstring>
+
+#include "engine/format/motion.hpp"
+#include "engine/trace/aabb_test.hpp"
+#include "engine/trace/hit_rules.hpp"
+#include "engine/trace/lss_test.hpp"
+#include "engine/trace/node_test_sse.hpp"
+#include "engine/trace/sphere_test.hpp"
+#include "engine/trace/traversal_steps.hpp"
+#include "engine/util/math.hpp"
+#include "vkas/vkas_compat.h"
+
+namespace vkas {
+
+using namespace format;
+
+namespace {
+
+void resetHit(QueryHit& h, float tMax) {
+    std::memset(&h, 0, sizeof h);
+    h.type = kCommittedNone;
+    h.t = tMax;
+}
+
+void push(RayQueryState& q, ChildRef ref, float dist) { pushChild(q.stackRef, q.stackDist, q.sp, ref, dist); }
+
+// Tests the children of one node and pushes the hit ones, farthest first so the nearest is popped next.
+void visitNode(RayQueryState& q, const Node* nodes, uint32_t index, const ShearedRay& r) {
+    const Node& node = nodes[index];
+    float entry[kNodeWidth];
+    float dist[kNodeWidth];
+    ChildRef ref[kNodeWidth];
+    const uint32_t hits = orderHitChildren(node, childEntryDistances(node, r, q.tMin, q.tMax, entry), entry, ref, dist);
+    for (uint32_t k = 0; k < hits; ++k) {
+        if (isInternal(ref[k])) prefetchNode(nodes + nodeIndex(ref[k]));
+        push(q, ref[k], dist[k]);
+    }
+}
+
+// Enters `inst` with the world-to-object transform `worldToObject` (the record's own, or [NV-motion] the one
+// interpolated at the ray time).
+void enterInstanceWith(RayQueryState& q, const InstanceRecord& inst, const float (*worldToObject)[4]) {
+    const std::byte* blas = q.resolver ? q.resolver(inst.reference) : nullptr;
+    const Header* h = traversableStructure(blas, StructureType::BottomLevel);
+    if (!h || skippedByRayFlags(*h, q.flags)) return;
+    const bool aabbs = h->primitiveType == VK_GEOMETRY_TYPE_AABBS_KHR;
+    float oo[3], od[3];
+    transformRay(worldToObject, q.worldOrigin, q.worldDirection, oo, od);
+    prepareShearedRay(q.objectRay, oo, od);
+    q.instance = &inst;
+    q.bottomLevel = blas;
+    q.bottomLevelAabbs = aabbs;
+    q.bottomLevelMotion =
+        h->primitiveType == VK_GEOMETRY_TYPE_TRIANGLES_KHR && motion::isMotionBuild(h->buildFlags);
+    q.bottomLevelSwept = (h->primitiveType == VK_GEOMETRY_TYPE_SPHERES_NV ||
+                          h->primitiveType == VK_GEOMETRY_TYPE_LINEAR_SWEPT_SPHERES_NV)
+                             ? h->primitiveType
+                             : 0u;
+    q.inBottomLevel = true;
+    q.topLevelStackBase = q.sp;
+    q.bottomLeafNext = q.bottomLeafEnd = 0;
+    push(q, h->root, q.tMin);
+}
+
+void enterInstance(RayQueryState& q, const InstanceRecord& inst) {
+    if (!instanceVisible(inst, q.cullMask)) return;
+    enterInstanceWith(q, inst, inst.worldToObject);
+}
+
+// [NV-motion] An instance of a motion top level: static ones as usual, matrix and SRT motion ones with their
+// transform at the ray time (computed only after the mask test).
+void enterMotionInstance(RayQueryState& q, const MotionInstanceRecord& rec) {
+    const InstanceRecord& inst = rec.base;
+    if (!instanceVisible(inst, q.cullMask)) return;
+    if (inst.motionType == motion::kStatic) {
+        enterInstanceWith(q, inst, inst.worldToObject);
+        return;
+    }
+    float objectToWorld[3][4], worldToObject[3][4];
+    motion::instanceTransformsAt(inst, q.time, objectToWorld, worldToObject);
+    enterInstanceWith(q, inst, worldToObject);
+}
+
+enum class TriangleOutcome { None, Committed, Candidate };
+
+void commit(RayQueryState& q, const QueryHit& hit, uint32_t type) {
+    q.committed = hit;
+    q.committed.type = type;
+    q.tMax = hit.t;
+    if (q.flags & kRayTerminateOnFirstHit) q.done = true;
+}
+
+// Starts a candidate on the current instance (hit_rules.hpp, startHit).
+inline QueryHit& startCandidate(RayQueryState& q, uint32_t type, float t) {
+    startHit(q.candidate, type, t, q.instance, q.objectRay);
+    return q.candidate;
+}
+
+// Tests `tri` with the positions `v` (the record's own, or [NV-motion] the ones interpolated at the ray time).
+TriangleOutcome testTriangle(RayQueryState& q, const TriangleRecord& tri, const float (*v)[3]) {
+    TriangleCandidate c;
+    if (!triangleCandidate(q.objectRay, q.tMin, q.tMax, q.flags, q.instance->sbtOffsetAndFlags >> 24, tri, v, c))
+        return TriangleOutcome::None;
+    setTriangleHit(q.candidate, kCandidateTriangle, c, tri, q.instance, q.objectRay);
+    if (c.opaque) {
+        commit(q, q.candidate, kCommittedTriangle);
+        return TriangleOutcome::Committed;
+    }
+    q.candidatePending = true;
+    return TriangleOutcome::Candidate;
+}
+
+// [NV-motion] The rest of the current leaf of a motion bottom level: positions interpolated at the ray time.
+bool visitMotionTriangleLeaf(RayQueryState& q) {
+    const MotionTriangleRecord* records = motionTriangles(q.bottomLevel);
+    while (q.bottomLeafNext < q.bottomLeafEnd) {
+        const MotionTriangleRecord& rec = records[q.bottomLeafNext++];
+        float v[3][3];
+        for (int j = 0; j < 3; ++j)
+            for (int c = 0; c < 3; ++c) v[j][c] = motion::lerp(rec.base.v[j][c], rec.v1[j][c], q.time);
+        // Degenerate at the ray time (a line or a point): never hit. The build keeps such triangles (they may be
+        // degenerate at some times only), and a ray through the line can get a non-zero determinant from rounding.
+        if (isDegenerateTriangle(v)) continue;
+        if (testTriangle(q, rec.base, v) == TriangleOutcome::Candidate) return true;
+        if (q.done) return false;
+    }
+    return false;
+}
+
+// Tests the rest of the current triangle leaf. Returns true when a candidate needs the application.
+bool visitTriangleLeaf(RayQueryState& q) {
+    if (q.bottomLevelMotion) return visitMotionTriangleLeaf(q);  // once per leaf, not per triangle
+    const TriangleRecord* records = triangles(q.bottomLevel);
+    while (q.bottomLeafNext < q.bottomLeafEnd) {
+        const TriangleRecord& tri = records[q.bottomLeafNext++];
+        if (testTriangle(q, tri, tri.v) == TriangleOutcome::Candidate) return true;
+        if (q.done) return false;  // an opaque hit with TerminateOnFirstHit
+    }
+    return false;
+}
+
+// Every AABB the ray meets goes back to the application, opaque or not: only it knows the shape inside.
+bool testAabb(RayQueryState& q, const AabbRecord& box) {
+    float tEnter;
+    if (!intersectAabb(q.objectRay.org, q.objectRay.dir, box.lower, box.upper, q.tMin, q.tMax, tEnter)) return false;
+    const uint32_t instanceFlags = q.instance->sbtOffsetAndFlags >> 24;
+    const bool opaque = resolveOpacity((box.flags & kAabbOpaque) != 0, instanceFlags, q.flags);
+    if (culledByOpacity(opaque, q.flags)) return false;
+
+    QueryHit& c = startCandidate(q, kCandidateAabb, tEnter);
+    c.aabbOpaque = opaque;
+    c.aabb = &box;
+    q.candidatePending = true;
+    return true;
+}
+
+// Tests the rest of the current AABB leaf. Returns true at the first candidate.
+bool visitAabbLeaf(RayQueryState& q) {
+    const AabbRecord* records = aabbs(q.bottomLevel);
+    while (q.bottomLeafNext < q.bottomLeafEnd)
+        if (testAabb(q, records[q.bottomLeafNext++])) return true;
+    return false;
+}
+
+// [NV-LSS] Spheres and linear swept spheres are built-in primitives: like triangles, opaque ones commit at once
+// and non-opaque ones go back to the application as triangle-type candidates. Facing culls do not apply (they
+// are for triangles); SkipTriangles (SkipBuiltinPrimitivesNV) skipped the whole instance (skippedByRayFlags).
+TriangleOutcome testSwept(RayQueryState& q, const SphereRecord* sphere, const LssRecord* lss) {
+    float t, u = 0.0f;
+    // Degenerate (zero radii, kept for updates) or made invalid by an update: no candidate at all.
+    if (((sphere ? sphere->flags : lss->flags) & kSweptDegenerate) != 0) return TriangleOutcome::None;
+    uint32_t recordFlags;
+    if (sphere) {
+        if (!intersectSphere(q.objectRay.org, q.objectRay.dir, sphere->center, sphere->radius, q.tMin, q.tMax, t))
+            return TriangleOutcome::None;
+        recordFlags = sphere->flags;
+    } else {
+        uint32_t caps = ((lss->flags & kLssCap0) ? kLssCapBit0 : 0u) | ((lss->flags & kLssCap1) ? kLssCapBit1 : 0u);
+        if (!intersectLss(q.objectRay.org, q.objectRay.dir, lss->p0, lss->r0, lss->p1, lss->r1, caps, q.tMin, q.tMax,
+                          t, u))
+            return TriangleOutcome::None;
+        recordFlags = lss->flags;
+    }
+    const uint32_t instanceFlags = q.instance->sbtOffsetAndFlags >> 24;
+    const bool opaque = resolveOpacity((recordFlags & kSweptOpaque) != 0, instanceFlags, q.flags);
+    if (culledByOpacity(opaque, q.flags)) return TriangleOutcome::None;
+
+    QueryHit& c = startCandidate(q, kCandidateTriangle, t);
+    c.sphere = sphere;
+    c.lss = lss;
+    c.lssHitValue = u;
+    if (opaque) {
+        commit(q, c, kCommittedTriangle);
+        return TriangleOutcome::Committed;
+    }
+    q.candidatePending = true;
+    return TriangleOutcome::Candidate;
+}
+
+// Tests the rest of the current sphere or LSS leaf. Returns true when a candidate needs the application.
+bool visitSweptLeaf(RayQueryState& q) {
+    const bool isSphere = q.bottomLevelSwept == VK_GEOMETRY_TYPE_SPHERES_NV;
+    while (q.bottomLeafNext < q.bottomLeafEnd) {
+        const uint64_t i = q.bottomLeafNext++;
+        const TriangleOutcome r = isSphere ? testSwept(q, &spheres(q.bottomLevel)[i], nullptr)
+                                           : testSwept(q, nullptr, &lssRecords(q.bottomLevel)[i]);
+        if (r == TriangleOutcome::Candidate) return true;
+        if (q.done) return false;
+    }
+    return false;
+}
+
+}  // namespace
+
+void queryInitialize(RayQueryState& q, const std::byte* topLevel, BlasResolver resolver, uint32_t rayFlags,
+                     uint32_t cullMask, const float origin[3], float tMin, const float direction[3], float tMax,
+                     float time) {
+    std::memcpy(q.worldOrigin, origin, sizeof q.worldOrigin);
+    q.time = time;
+    q.topLevelMotion = false;
+    q.bottomLevelMotion = false;
+    std::memcpy(q.worldDirection, direction, sizeof q.worldDirection);
+    q.tMin = tMin;
+    q.tMax = tMax;
+    q.flags = rayFlags;
+    q.cullMask = cullMask;
+    q.topLevel = topLevel;
+    q.resolver = resolver;
+    q.done = false;
+    q.inBottomLevel = false;
+    q.candidatePending = false;
+    q.sp = 0;
+    q.topLevelStackBase = 0;
+    q.topLeafNext = q.topLeafEnd = 0;
+    q.bottomLeafNext = q.bottomLeafEnd = 0;
+    q.instance = nullptr;
+    q.bottomLevel = nullptr;
+    q.bottomLevelAabbs = false;
+    q.bottomLevelSwept = 0;
+    resetHit(q.candidate, tMax);
+    resetHit(q.committed, tMax);
+    prepareShearedRay(q.worldRay, origin, direction);
+    const Header* h = traversableStructure(topLevel, StructureType::TopLevel);
+    if (!h) {
+        q.done = true;  // a null acceleration structure: every ray misses
+        return;
+    }
+    q.topLevelMotion = motion::isMotionBuild(h->buildFlags);
+    push(q, h->root, tMin);
+}
+
+bool queryProceed(RayQueryState& q) {
+    q.candidatePending = false;  // an unconfirmed candidate is dropped
+    while (!q.done) {
+        if (q.inBottomLevel) {
+            if (q.bottomLeafNext < q.bottomLeafEnd) {
+                if (q.bottomLevelAabbs    ? visitAabbLeaf(q)
+                    : q.bottomLevelSwept ? visitSweptLeaf(q)
+                                         : visitTriangleLeaf(q))
+                    return true;
+                continue;
+            }
+            if (q.sp == q.topLevelStackBase) {
+                q.inBottomLevel = false;
+                continue;
+            }
+        } else {
+            if (q.topLeafNext < q.topLeafEnd) {
+                if (q.topLevelMotion)  // [NV-motion]: once per instance
+                    enterMotionInstance(q, motionInstances(q.topLevel)[q.topLeafNext++]);
+                else
+                    enterInstance(q, instances(q.topLevel)[q.topLeafNext++]);
+                continue;
+            }
+            if (q.sp == 0) {
+                q.done = true;
+                break;
+            }
+        }
+        --q.sp;
+        const ChildRef ref = q.stackRef[q.sp];
+        if (q.stackDist[q.sp] > q.tMax * kFarSlack) continue;  // behind the committed hit
+        if (isInternal(ref)) {
+            const std::byte* base = q.inBottomLevel ? q.bottomLevel : q.topLevel;
+            visitNode(q, nodes(base), nodeIndex(ref), q.inBottomLevel ? q.objectRay : q.worldRay);
+        } else if (isLeaf(ref)) {
+            if (q.inBottomLevel) {
+                q.bottomLeafNext = leafFirst(ref);
+                q.bottomLeafEnd = leafFirst(ref) + leafCount(ref);
+            } else {
+                q.topLeafNext = leafFirst(ref);
+                q.topLeafEnd = leafFirst(ref) + leafCount(ref);
+            }
+        }
+    }
+    return false;
+}
+
+void queryConfirm(RayQueryState& q) {
+    if (!q.candidatePending || q.candidate.type != kCandidateTriangle) return;
+    q.candidatePending = false;
+    commit(q, q.candidate, kCommittedTriangle);
+}
+
+void queryGenerate(RayQueryState& q, float tHit) {
+    if (!q.candidatePending || q.candidate.type != kCandidateAabb) return;
+    if (!(tHit >= q.tMin && tHit <= q.tMax)) return;
+    q.candidatePending = false;
+    QueryHit h = q.candidate;
+    h.t = tHit;
+    commit(q, h, kCommittedGenerated);
+}
+
+void queryTerminate(RayQueryState& q) {
+    q.done = true;
+    q.candidatePending = false;
+}
+
+void queryRunToCompletion(RayQueryState& q) {
+    while (queryProceed(q)) queryConfirm(q);
+}
+
+}  // namespace vkas
