@@ -1,0 +1,112 @@
+// The format's checks of untrusted bytes (format/check.hpp) on their own: a structure the engine builds on plain
+// memory passes; each kind of damage a blob can carry is refused with Corrupt, never read past the given size.
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <vector>
+
+#include "engine/build/size_query.hpp"
+#include "engine/build/structure_build.hpp"
+#include "engine/format/check.hpp"
+#include "engine/format/layout.hpp"
+#include "vkas_test.h"
+
+namespace {
+
+using namespace vkas;
+
+struct FormatCheck : ::testing::Test {
+    uint64_t seed = vt::chooseSeed();
+    vt::Rng rng{seed};
+    std::vector<float> vertices;
+    std::vector<std::byte> block;
+
+    void SetUp() override {
+        std::cout << "[   SEED   ] VKAS_TEST_SEED=" << seed << std::endl;
+        RecordProperty("VKAS_TEST_SEED", std::to_string(seed));
+        // A bottom level of random triangles, built by the engine alone (no device, no handles).
+        const uint32_t triangles = 500;
+        for (uint32_t i = 0; i < 9 * triangles; ++i) vertices.push_back(rng.uniformf(-10.0f, 10.0f));
+        VkAccelerationStructureGeometryKHR geometry{};
+        geometry.sType = VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_GEOMETRY_KHR;
+        geometry.geometryType = VK_GEOMETRY_TYPE_TRIANGLES_KHR;
+        auto& t = geometry.geometry.triangles;
+        t.sType = VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_GEOMETRY_TRIANGLES_DATA_KHR;
+        t.vertexFormat = VK_FORMAT_R32G32B32_SFLOAT;
+        t.vertexData.hostAddress = vertices.data();
+        t.vertexStride = 12;
+        t.maxVertex = 3 * triangles - 1;
+        t.indexType = VK_INDEX_TYPE_NONE_KHR;
+        VkAccelerationStructureBuildRangeInfoKHR range{triangles, 0, 0, 0};
+        const StructureSizes sizes = structureSizes(format::StructureType::BottomLevel, 1, triangles);
+        std::vector<std::byte> scratch(sizes.buildScratchSize);
+        block.assign(sizes.structureSize, std::byte{0xAA});
+        VkAccelerationStructureBuildGeometryInfoKHR info{};
+        info.sType = VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_BUILD_GEOMETRY_INFO_KHR;
+        info.type = VK_ACCELERATION_STRUCTURE_TYPE_BOTTOM_LEVEL_KHR;
+        info.mode = VK_BUILD_ACCELERATION_STRUCTURE_MODE_BUILD_KHR;
+        info.geometryCount = 1;
+        info.pGeometries = &geometry;
+        info.scratchData.hostAddress = scratch.data();
+        BuildJob job{&info, &range, block.data(), block.size(), nullptr};
+        ASSERT_EQ(buildAccelerationStructure(job), VK_SUCCESS);
+        block.resize(format::header(block.data())->usedSize);
+    }
+
+    format::Header headerCopy() const {
+        format::Header h;
+        std::memcpy(&h, block.data(), sizeof h);
+        return h;
+    }
+    format::CheckStatus checkWith(const format::Header& h) {
+        std::vector<std::byte> copy = block;
+        std::memcpy(copy.data(), &h, sizeof h);
+        return format::checkBlock(copy.data(), copy.size()).status;
+    }
+};
+
+TEST_F(FormatCheck, a_built_structure_passes) {
+    EXPECT_TRUE(format::checkBlock(block.data(), block.size()).ok()) << format::checkBlock(block.data(), block.size()).reason;
+}
+
+TEST_F(FormatCheck, every_kind_of_damage_is_refused) {
+    using format::CheckStatus;
+    format::Header h = headerCopy();
+    h.magic ^= 1;
+    EXPECT_EQ(checkWith(h), CheckStatus::Corrupt) << "magic";
+    h = headerCopy(), h.version = 99;
+    EXPECT_EQ(checkWith(h), CheckStatus::Corrupt) << "version";
+    h = headerCopy(), h.usedSize = block.size() + 64;
+    EXPECT_EQ(checkWith(h), CheckStatus::Corrupt) << "usedSize beyond the bytes";
+    h = headerCopy(), h.nodeCount += 1000;
+    EXPECT_EQ(checkWith(h), CheckStatus::Corrupt) << "nodes beyond usedSize";
+    h = headerCopy(), h.recordCount += 1;
+    EXPECT_EQ(checkWith(h), CheckStatus::Corrupt) << "records beyond usedSize";
+    h = headerCopy(), h.root = format::makeInternalRef(h.nodeCount);
+    EXPECT_EQ(checkWith(h), CheckStatus::Corrupt) << "root past the nodes";
+    h = headerCopy(), h.geometryOffset = 3;
+    EXPECT_EQ(checkWith(h), CheckStatus::Corrupt) << "sections out of order";
+    // A node that names itself (a loop traversal could not leave) and a leaf past the records.
+    {
+        std::vector<std::byte> copy = block;
+        const format::Header hh = headerCopy();
+        auto* nodes = reinterpret_cast<format::Node*>(copy.data() + hh.nodeOffset);
+        ASSERT_GT(hh.nodeCount, 0u);
+        nodes[0].child[0] = format::makeInternalRef(0);
+        EXPECT_EQ(format::checkBlock(copy.data(), copy.size()).status, CheckStatus::Corrupt) << "a loop";
+        copy = block;
+        nodes = reinterpret_cast<format::Node*>(copy.data() + hh.nodeOffset);
+        for (auto& c : nodes[0].child)
+            if (format::isLeaf(c)) c = format::makeLeafRef(hh.recordCount, 1);
+        for (auto& c : nodes[0].child)
+            if (format::isInternal(c)) c = format::makeLeafRef(hh.recordCount, 1);
+        EXPECT_EQ(format::checkBlock(copy.data(), copy.size()).status, CheckStatus::Corrupt) << "a leaf past the records";
+    }
+    // Every truncation: refused, and nothing read past the end (the sanitizer build would see it).
+    for (uint64_t size = 0; size < block.size(); size += 1 + size / 8) {
+        std::vector<std::byte> cut(block.begin(), block.begin() + size);
+        EXPECT_FALSE(format::checkBlock(cut.data(), cut.size()).ok()) << "truncated to " << size;
+    }
+}
+
+}  // namespace

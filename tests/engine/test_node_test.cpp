@@ -1,0 +1,155 @@
+// The ray / node test on its own: the SSE2 version (trace/node_test_sse.hpp) against a scalar reference written
+// here from its documented rule, the AVX2 version (trace/node_test_avx2.hpp) against the SSE2 one lane for lane,
+// bit for bit, and both against double-precision slabs: a box the exact ray crosses is never rejected.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <limits>
+
+#include "engine/trace/node_test_avx2.hpp"
+#include "engine/trace/node_test_sse.hpp"
+#include "engine/trace/ray.hpp"
+#include "vkas_test.h"
+
+namespace {
+
+using vkas::format::Node;
+using vkas::format::kNodeWidth;
+constexpr float kInf = std::numeric_limits<float>::infinity();
+
+struct NodeTest : ::testing::Test {
+    uint64_t seed = vt::chooseSeed();
+    vt::Rng rng{seed};
+    void SetUp() override {
+        std::cout << "[   SEED   ] VKAS_TEST_SEED=" << seed << std::endl;
+        RecordProperty("VKAS_TEST_SEED", std::to_string(seed));
+    }
+
+    // A coordinate from a few regimes: ordinary, near zero, on a grid the rays also use (exact plane hits).
+    float coordinate() {
+        switch (rng.below(4)) {
+            case 0: return rng.uniformf(-10.0f, 10.0f);
+            case 1: return rng.uniformf(-1e-3f, 1e-3f);
+            case 2: return float(rng.range(-4, 4));
+            default: return rng.uniformf(-1e4f, 1e4f);
+        }
+    }
+
+    // Eight child boxes: ordinary, flat (lower == upper on an axis), empty slots (+inf / -inf), inverted.
+    Node randomNode() {
+        alignas(64) Node n;
+        std::memset(&n, 0, sizeof n);
+        float* lower[3] = {n.lowerX, n.lowerY, n.lowerZ};
+        float* upper[3] = {n.upperX, n.upperY, n.upperZ};
+        for (uint32_t i = 0; i < kNodeWidth; ++i) {
+            const uint32_t kind = rng.below(8);
+            for (int a = 0; a < 3; ++a) {
+                float lo = coordinate(), hi = coordinate();
+                if (lo > hi) std::swap(lo, hi);
+                if (kind == 1) hi = lo;           // flat
+                if (kind == 2) lo = kInf, hi = -kInf;  // empty slot
+                if (kind == 3) std::swap(lo, hi);  // inverted: never hit
+                lower[a][i] = lo, upper[a][i] = hi;
+            }
+            n.child[i] = kind == 2 ? vkas::format::kEmptyRef : vkas::format::makeLeafRef(i, 1);
+        }
+        return n;
+    }
+
+    // A ray with some zero direction components (the NaN products of the slab test).
+    void randomRay(float org[3], float dir[3]) {
+        for (int a = 0; a < 3; ++a) {
+            org[a] = coordinate();
+            dir[a] = rng.coin(0.2) ? 0.0f : (rng.coin(0.1) ? -0.0f : rng.uniformf(-1.0f, 1.0f));
+        }
+        if (dir[0] == 0.0f && dir[1] == 0.0f && dir[2] == 0.0f) dir[rng.below(3)] = 1.0f;
+    }
+};
+
+// The rule the SSE and AVX2 versions implement, one lane at a time (node_test_sse.hpp's comment): NaN-ignoring
+// max / min over the three slabs, clamped to [tMin, tMax], a hit when tNear <= tFar * kFarSlack.
+uint32_t referenceEntries(const Node& node, const vkas::ShearedRay& r, float tMin, float tMax, float out[8]) {
+    const vkas::NodePlanes p(node, r);
+    auto maxNoNan = [](float a, float b) { return b > a ? b : a; };
+    auto minNoNan = [](float a, float b) { return b < a ? b : a; };
+    uint32_t mask = 0;
+    for (uint32_t i = 0; i < kNodeWidth; ++i) {
+        float tNear = maxNoNan(tMin, (p.nearX[i] - r.org[0]) * r.invDir[0]);
+        tNear = maxNoNan(tNear, (p.nearY[i] - r.org[1]) * r.invDir[1]);
+        tNear = maxNoNan(tNear, (p.nearZ[i] - r.org[2]) * r.invDir[2]);
+        float tFar = minNoNan(tMax, (p.farX[i] - r.org[0]) * r.invDir[0]);
+        tFar = minNoNan(tFar, (p.farY[i] - r.org[1]) * r.invDir[1]);
+        tFar = minNoNan(tFar, (p.farZ[i] - r.org[2]) * r.invDir[2]);
+        out[i] = tNear <= tFar * vkas::kFarSlack ? tNear : kInf;
+        if (out[i] != kInf) mask |= 1u << i;
+    }
+    return mask;
+}
+
+// Whether the exact ray (in double) meets box i of `node` within [tMin, tMax].
+bool exactlyCrosses(const Node& n, uint32_t i, const float org[3], const float dir[3], float tMin, float tMax) {
+    const float lo[3] = {n.lowerX[i], n.lowerY[i], n.lowerZ[i]}, hi[3] = {n.upperX[i], n.upperY[i], n.upperZ[i]};
+    double t0 = tMin, t1 = tMax;
+    for (int a = 0; a < 3; ++a) {
+        if (!(lo[a] <= hi[a])) return false;
+        if (dir[a] == 0.0f) {
+            if (org[a] < lo[a] || org[a] > hi[a]) return false;
+            continue;
+        }
+        double ta = (double(lo[a]) - org[a]) / dir[a], tb = (double(hi[a]) - org[a]) / dir[a];
+        if (ta > tb) std::swap(ta, tb);
+        t0 = std::max(t0, ta), t1 = std::min(t1, tb);
+    }
+    return t0 <= t1;
+}
+
+bool sameBits(float a, float b) { return std::memcmp(&a, &b, sizeof a) == 0; }
+
+TEST_F(NodeTest, sse_matches_the_scalar_rule_and_never_rejects_a_crossed_box) {
+    for (int iter = 0; iter < 20000; ++iter) {
+        const Node node = randomNode();
+        float org[3], dir[3];
+        randomRay(org, dir);
+        vkas::ShearedRay r;
+        vkas::prepareShearedRay(r, org, dir);
+        const float tMin = rng.coin(0.5) ? 0.0f : rng.uniformf(0.0f, 5.0f);
+        const float tMax = rng.coin(0.3) ? kInf : tMin + rng.uniformf(0.0f, 50.0f);
+        alignas(32) float sse[8], ref[8];
+        const uint32_t maskSse = vkas::childEntryDistances(node, r, tMin, tMax, sse);
+        const uint32_t maskRef = referenceEntries(node, r, tMin, tMax, ref);
+        ASSERT_EQ(maskSse, maskRef) << "iteration " << iter;
+        for (uint32_t i = 0; i < kNodeWidth; ++i) {
+            ASSERT_TRUE(sameBits(sse[i], ref[i])) << "iteration " << iter << " lane " << i;
+            if (exactlyCrosses(node, i, org, dir, tMin, tMax)) {
+                ASSERT_TRUE(maskSse & (1u << i)) << "iteration " << iter << " lane " << i << ": a crossed box rejected";
+            }
+        }
+    }
+}
+
+TEST_F(NodeTest, avx2_lanes_equal_sse_lanes_bit_for_bit) {
+#if VKAS_NODE_TEST_AVX2
+    if (!__builtin_cpu_supports("avx2")) GTEST_SKIP() << "this CPU has no AVX2";
+    for (int iter = 0; iter < 20000; ++iter) {
+        alignas(64) const Node node = randomNode();
+        float org[3], dir[3];
+        randomRay(org, dir);
+        vkas::ShearedRay r;
+        vkas::prepareShearedRay(r, org, dir);
+        const float tMin = rng.coin(0.5) ? 0.0f : rng.uniformf(0.0f, 5.0f);
+        const float tMax = rng.coin(0.3) ? kInf : tMin + rng.uniformf(0.0f, 50.0f);
+        alignas(32) float sse[8], avx[8];
+        const uint32_t maskSse = vkas::childEntryDistances(node, r, tMin, tMax, sse);
+        const uint32_t maskAvx = vkas::childEntryDistancesAvx2(node, r, tMin, tMax, avx);
+        ASSERT_EQ(maskSse, maskAvx) << "iteration " << iter;
+        for (uint32_t i = 0; i < kNodeWidth; ++i)
+            ASSERT_TRUE(sameBits(sse[i], avx[i])) << "iteration " << iter << " lane " << i << ": " << sse[i] << " vs "
+                                                  << avx[i];
+    }
+#else
+    GTEST_SKIP() << "not an x86-64 build";
+#endif
+}
+
+}  // namespace
