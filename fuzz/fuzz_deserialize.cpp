@@ -12,8 +12,8 @@
 #include <algorithm>
 #include <cstring>
 
-#include "engine/format_check.hpp"  // the hash is resealed the way vkas checks it
-#include "engine/serialize.hpp"
+#include "engine/format/check.hpp"  // the hash is resealed the way vkas checks it
+#include "engine/format/serialize.hpp"
 #include "fuzz_common.hpp"
 
 namespace {

@@ -12,9 +12,9 @@
 #include <random>
 #include <vector>
 
-#include "engine/geometry_fetch.hpp"
-#include "engine/math.hpp"
-#include "engine/vertex_format.hpp"
+#include "engine/input/triangles.hpp"
+#include "engine/util/math.hpp"
+#include "engine/input/vertex_format.hpp"
 #include "vkas_test.h"
 
 namespace {

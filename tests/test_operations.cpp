@@ -24,7 +24,7 @@
 
 #include <xxhash.h>
 
-#include "engine/serialize.hpp"  // serializeBlock's two hash schedules, compared below
+#include "engine/format/serialize.hpp"  // serializeBlock's two hash schedules, compared below
 #include "meshes.h"
 
 using namespace vt;

@@ -99,6 +99,28 @@ uint64_t primitiveTotal(const BuildJob& job) {
     return total;
 }
 
+// records[i] = temp[refs[i].index] for i in [begin, end), with the record size a constant of each copy loop (a copy
+// of a size known at compile time is a few moves, not a call).
+template <uint64_t kSize>
+void copyRecords(std::byte* records, const std::byte* temp, const PrimRef* refs, uint64_t begin, uint64_t end) {
+    for (uint64_t i = begin; i < end; ++i) std::memcpy(records + i * kSize, temp + uint64_t(refs[i].index) * kSize, kSize);
+}
+
+void copyInTreeOrder(uint64_t recordSize, std::byte* records, const std::byte* temp, const PrimRef* refs,
+                     uint64_t begin, uint64_t end) {
+    switch (recordSize) {
+        case sizeof(TriangleRecord): return copyRecords<sizeof(TriangleRecord)>(records, temp, refs, begin, end);
+        case sizeof(MotionTriangleRecord):
+            return copyRecords<sizeof(MotionTriangleRecord)>(records, temp, refs, begin, end);
+        case sizeof(InstanceRecord): return copyRecords<sizeof(InstanceRecord)>(records, temp, refs, begin, end);
+        case sizeof(MotionInstanceRecord):
+            return copyRecords<sizeof(MotionInstanceRecord)>(records, temp, refs, begin, end);
+        default:
+            for (uint64_t i = begin; i < end; ++i)
+                std::memcpy(records + i * recordSize, temp + uint64_t(refs[i].index) * recordSize, recordSize);
+    }
+}
+
 }  // namespace
 
 VkResult buildAccelerationStructure(const BuildJob& job) {
@@ -130,9 +152,7 @@ VkResult buildAccelerationStructure(const BuildJob& job) {
     constexpr uint32_t kCopyChunk = 65536;
     parallelForChunks(n > 2 * kCopyChunk ? job.parallel : nullptr, n, kCopyChunk,
                       [&](uint32_t, uint64_t begin, uint64_t end) {
-                          for (uint64_t i = begin; i < end; ++i)
-                              std::memcpy(records + i * kRecordSize, temp + uint64_t(refs[i].index) * kRecordSize,
-                                          kRecordSize);
+                          copyInTreeOrder(kRecordSize, records, temp, refs, begin, end);
                       });
     writeGeometryDescs(job.dst, job);
     clearGaps(job.dst, info.geometryCount, tree.nodeCount, layout);
