@@ -1,9 +1,11 @@
-#include "api/update_validation.hpp"
+#include "api/validate/update.hpp"
 
 #include <cstdio>
 
 #include <algorithm>
 
+#include "api/build_geometry_info.hpp"
+#include "api/validate/parameters.hpp"
 #include "engine/as_build.hpp"
 #include "engine/format.hpp"
 #include "engine/refit.hpp"
@@ -13,12 +15,6 @@ namespace vkas {
 namespace {
 
 using ull = unsigned long long;
-
-const VkAccelerationStructureGeometryKHR* geometryAt(const VkAccelerationStructureBuildGeometryInfoKHR& info,
-                                                     uint32_t i) {
-    if (info.pGeometries) return &info.pGeometries[i];
-    return info.ppGeometries ? info.ppGeometries[i] : nullptr;
-}
 
 bool aliases(const AccelerationStructure* a, const AccelerationStructure* b) {
     const auto pa = reinterpret_cast<uintptr_t>(a->block()), pb = reinterpret_cast<uintptr_t>(b->block());
