@@ -6,14 +6,10 @@
 
 #include "api/device.hpp"
 #include "api/guard.hpp"
-#include "api/validation.hpp"
+#include "api/validate/ray.hpp"
+#include "api/validate/validator.hpp"
 #include "engine/trace/batch_kernel.hpp"
 #include "engine/trace/ray_query.hpp"
-
-namespace vkas {
-bool validateRay(Validator& v, const AccelerationStructure* tlas, uint32_t rayFlags, const float origin[3],
-                 float tMin, const float direction[3], float tMax, const char* where);
-}
 
 namespace {
 

@@ -16,6 +16,14 @@
 
 namespace vkas {
 
+// Two helpers the work functions share with the copy rules (api/validate/copy_infos.cpp).
+// Whether the host ranges [a, a + aSize) and [b, b + bSize) overlap (an empty range overlaps nothing).
+bool rangesOverlap(uintptr_t a, uint64_t aSize, uintptr_t b, uint64_t bSize);
+
+// The readable extent the application promises for a serialized blob: its header's serialized size (at least the
+// header itself, which every blob has).
+uint64_t blobExtent(const void* src);
+
 // The block of `as` when it holds a structure vkas wrote (built, copied or deserialized) that fits in its range,
 // else nullptr.
 const std::byte* constructedBlock(const AccelerationStructure& as);

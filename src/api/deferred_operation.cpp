@@ -9,7 +9,7 @@
 #include "api/device.hpp"
 #include "api/entry_points.hpp"
 #include "api/guard.hpp"
-#include "api/validation.hpp"
+#include "api/validate/parameters.hpp"
 
 namespace vkas {
 
@@ -151,15 +151,6 @@ VkResult DeferredOperation::result() {
 bool DeferredOperation::pending() {
     std::lock_guard<std::mutex> lock(mutex_);
     return pending_;
-}
-
-void checkDeferredOperation(Validator& v, const Device& device, VkDeferredOperationKHR operation,
-                            const DeferredOperationVuids& vuids) {
-    if (operation == VK_NULL_HANDLE) return;
-    if (auto* op = checkHandle<DeferredOperation>(v, device, operation, ObjectMagic::DeferredOperation,
-                                                  vuids.parameter, vuids.parent, "deferredOperation"))
-        v.check(!op->pending(), vuids.pending,
-                "deferredOperation still has a deferred command pending: join it until it completes first.");
 }
 
 VkResult runOrDefer(VkDeferredOperationKHR operation, std::function<VkResult()> work) {

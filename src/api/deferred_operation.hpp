@@ -59,19 +59,6 @@ public:
     DeferredOperation();
 };
 
-class Validator;
-
-// The deferredOperation VUIDs of one deferrable command.
-struct DeferredOperationVuids {
-    const char* parameter;  // -deferredOperation-parameter: a live VkDeferredOperationKHR
-    const char* parent;     // -deferredOperation-parent: of this device
-    const char* pending;    // -deferredOperation-03678: no deferred command still pending on it
-};
-
-// Checks a deferrable command's deferredOperation parameter. VK_NULL_HANDLE is always valid.
-void checkDeferredOperation(Validator& v, const Device& device, VkDeferredOperationKHR operation,
-                            const DeferredOperationVuids& vuids);
-
 // Runs `work` now when operation is VK_NULL_HANDLE and returns its result; otherwise makes it the operation's one
 // task (its result becomes the operation's) and returns VK_OPERATION_DEFERRED_KHR.
 VkResult runOrDefer(VkDeferredOperationKHR operation, std::function<VkResult()> work);

@@ -3,7 +3,7 @@
 #include "api/deferred_operation.hpp"
 #include "api/guard.hpp"
 
-#include "api/validation.hpp"
+#include "api/validate/validator.hpp"
 #include "engine/format/layout.hpp"
 
 #include <cstdlib>

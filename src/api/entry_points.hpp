@@ -28,7 +28,7 @@ VKAPI_ATTR uint32_t VKAPI_CALL GetDeferredOperationMaxConcurrencyKHR(VkDevice, V
 VKAPI_ATTR VkResult VKAPI_CALL GetDeferredOperationResultKHR(VkDevice, VkDeferredOperationKHR);
 VKAPI_ATTR VkResult VKAPI_CALL DeferredOperationJoinKHR(VkDevice, VkDeferredOperationKHR);
 
-// Acceleration structures (as_commands.cpp).
+// Acceleration structures (structure_commands.cpp, build_commands.cpp).
 VKAPI_ATTR void VKAPI_CALL GetAccelerationStructureBuildSizesKHR(VkDevice, VkAccelerationStructureBuildTypeKHR,
                                                                  const VkAccelerationStructureBuildGeometryInfoKHR*,
                                                                  const uint32_t*,

@@ -6,6 +6,7 @@
 #include "api/guard.hpp"
 #include "api/limits.hpp"
 #include "engine/input/vertex_format.hpp"
+#include "engine/util/pnext_chain.hpp"
 
 namespace {
 
@@ -67,13 +68,13 @@ extern "C" VKAS_API void vkasGetAccelerationStructureFeatures(
     pFeatures->accelerationStructureHostCommands = VK_TRUE;
     pFeatures->descriptorBindingAccelerationStructureUpdateAfterBind = VK_FALSE;
     // Extension feature structures the application chained, as vkGetPhysicalDeviceFeatures2 would fill them.
-    for (auto* s = static_cast<VkBaseOutStructure*>(pFeatures->pNext); s; s = s->pNext) {
+    vkas::forEachInChain<VkBaseOutStructure>(pFeatures->pNext, [](VkBaseOutStructure* s) {
         if (s->sType == VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_RAY_TRACING_LINEAR_SWEPT_SPHERES_FEATURES_NV) {
             auto* f = reinterpret_cast<VkPhysicalDeviceRayTracingLinearSweptSpheresFeaturesNV*>(s);
             f->spheres = VK_TRUE;
             f->linearSweptSpheres = VK_TRUE;
         }
-    }
+    });
 }
 
 extern "C" VKAS_API void vkasGetAccelerationStructureProperties(

@@ -1,11 +1,11 @@
 // vkasRayQuery*: one function per SPIR-V OpRayQuery*KHR instruction, over the engine's RayQueryState that
 // lives inside the caller's VkasRayQuery, next to the device whose messenger reports the runtime rules.
-#include <cmath>
 #include <cstring>
 
 #include "api/device.hpp"
 #include "api/objects.hpp"
-#include "api/validation.hpp"
+#include "api/validate/ray.hpp"
+#include "api/validate/validator.hpp"
 #include "engine/format/motion.hpp"
 #include "engine/trace/ray_query.hpp"
 #include "vkas/vkas.h"
@@ -29,15 +29,6 @@ const vkas::AccelerationStructure* liveStructure(VkAccelerationStructureKHR hand
     return as->magic == vkas::ObjectMagic::AccelerationStructure ? as : nullptr;
 }
 
-// Reports a topLevel handle that names no live acceleration structure (VUID-...-06352: the operand must be a
-// top-level acceleration structure). Returns false then.
-bool checkTopLevelHandle(vkas::Validator& v, VkAccelerationStructureKHR topLevel,
-                         const vkas::AccelerationStructure* tlas) {
-    return v.check(topLevel == VK_NULL_HANDLE || tlas != nullptr, "VUID-RuntimeSpirv-OpRayQueryInitializeKHR-06352",
-                   "topLevel (0x%llx) is not a live VkAccelerationStructureKHR.",
-                   static_cast<unsigned long long>(reinterpret_cast<uintptr_t>(topLevel)));
-}
-
 bool builtWithMotion(const vkas::AccelerationStructure* as) {
     const std::byte* block = as ? as->block() : nullptr;
     return block && vkas::format::header(block)->magic == vkas::format::kMagic &&
@@ -55,57 +46,7 @@ const QueryHit& hit(const VkasRayQuery* q, VkBool32 committed) {
     return committed ? state(q).committed : state(q).candidate;
 }
 
-constexpr uint32_t kOpaqueGroup = VKAS_RAY_FLAG_OPAQUE | VKAS_RAY_FLAG_NO_OPAQUE | VKAS_RAY_FLAG_CULL_OPAQUE |
-                                  VKAS_RAY_FLAG_CULL_NO_OPAQUE;
-constexpr uint32_t kTriangleGroup = VKAS_RAY_FLAG_SKIP_TRIANGLES | VKAS_RAY_FLAG_CULL_BACK_FACING_TRIANGLES |
-                                    VKAS_RAY_FLAG_CULL_FRONT_FACING_TRIANGLES;
-
-bool atMostOneBit(uint32_t v) { return (v & (v - 1)) == 0; }
-
 }  // namespace
-
-namespace vkas {
-
-// The ray-parameter rules of OpRayQueryInitializeKHR (and of the batch call). Returns false when violated.
-bool validateRay(Validator& v, const AccelerationStructure* tlas, uint32_t rayFlags, const float origin[3],
-                 float tMin, const float direction[3], float tMax, const char* where) {
-    bool ok = true;
-    auto finite3 = [](const float* p) { return std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]); };
-    ok &= v.check(finite3(origin), "VUID-RuntimeSpirv-OpRayQueryInitializeKHR-06348",
-                  "%sthe ray origin (%g, %g, %g) is not finite.", where, origin[0], origin[1], origin[2]);
-    ok &= v.check(finite3(direction), "VUID-RuntimeSpirv-OpRayQueryInitializeKHR-06348",
-                  "%sthe ray direction (%g, %g, %g) is not finite.", where, direction[0], direction[1], direction[2]);
-    ok &= v.check(!std::isnan(tMin) && !std::isnan(tMax), "VUID-RuntimeSpirv-OpRayQueryInitializeKHR-06351",
-                  "%sRayTmin %g or RayTmax %g is NaN.", where, tMin, tMax);
-    ok &= v.check(!(tMin < 0.0f) && !(tMax < 0.0f), "VUID-RuntimeSpirv-OpRayQueryInitializeKHR-06349",
-                  "%sRayTmin %g and RayTmax %g must be non-negative.", where, tMin, tMax);
-    ok &= v.check(!(tMin > tMax), "VUID-RuntimeSpirv-OpRayQueryInitializeKHR-06350",
-                  "%sRayTmin %g is greater than RayTmax %g.", where, tMin, tMax);
-    ok &= v.check(atMostOneBit(rayFlags & kOpaqueGroup), "VUID-RuntimeSpirv-OpRayQueryInitializeKHR-06891",
-                  "%sRayFlags 0x%x has more than one of Opaque, NoOpaque, CullOpaque and CullNoOpaque.", where,
-                  rayFlags);
-    ok &= v.check(atMostOneBit(rayFlags & kTriangleGroup), "VUID-RuntimeSpirv-OpRayQueryInitializeKHR-06890",
-                  "%sRayFlags 0x%x has more than one of SkipTriangles, CullBackFacing and CullFrontFacing.", where,
-                  rayFlags);
-    // ForceOpacityMicromap2StateEXT (0x400) needs the RayTracingOpacityMicromapKHR capability, which vkas lacks.
-    ok &= v.check(!(rayFlags & 0x400u), "VUID-RuntimeSpirv-RayTracingOpacityMicromapKHR-11542",
-                  "%sRayFlags 0x%x has ForceOpacityMicromap2State, which needs the RayTracingOpacityMicromapKHR "
-                  "capability.",
-                  where, rayFlags);
-    ok &= v.check(!((rayFlags & VKAS_RAY_FLAG_SKIP_TRIANGLES) && (rayFlags & VKAS_RAY_FLAG_SKIP_AABBS)),
-                  "VUID-RuntimeSpirv-OpRayQueryInitializeKHR-06889",
-                  "%sRayFlags 0x%x has both SkipTriangles and SkipAABBs.", where, rayFlags);
-    if (tlas) {
-        const std::byte* block = tlas->block();
-        const auto* h = block ? format::header(block) : nullptr;
-        ok &= v.check(h && h->magic == format::kMagic && h->type == uint32_t(format::StructureType::TopLevel),
-                      "VUID-RuntimeSpirv-OpRayQueryInitializeKHR-06352",
-                      "%sthe acceleration structure is not a built top-level structure.", where);
-    }
-    return ok;
-}
-
-}  // namespace vkas
 
 extern "C" {
 
@@ -116,7 +57,7 @@ VKAS_API void vkasRayQueryInitialize(VkasRayQuery* q, VkAccelerationStructureKHR
     vkas::Validator v(tlas ? tlas->device : nullptr, "vkasRayQueryInitialize");
     bool valid = true;
     if (v.enabled())
-        valid = checkTopLevelHandle(v, topLevel, tlas) &&
+        valid = vkas::checkTopLevelHandle(v, topLevel, tlas) &&
                 vkas::validateRay(v, tlas, rayFlags, origin, tMin, direction, tMax, "");
     const std::byte* block = (tlas && valid) ? tlas->block() : nullptr;
     // An invalid ray traverses nothing: the query behaves as for a null acceleration structure.
@@ -137,7 +78,7 @@ VKAS_API void vkasRayQueryInitializeMotion(VkasRayQuery* q, VkAccelerationStruct
     vkas::Validator v(tlas ? tlas->device : nullptr, "vkasRayQueryInitializeMotion");
     bool valid = true;
     if (v.enabled()) {
-        valid = checkTopLevelHandle(v, topLevel, tlas) &&
+        valid = vkas::checkTopLevelHandle(v, topLevel, tlas) &&
                 vkas::validateRay(v, tlas, rayFlags, origin, tMin, direction, tMax, "");
         valid &= v.check(time >= 0.0f && time <= 1.0f, "VUID-RuntimeSpirv-OpTraceRayMotionNV-06366",
                          "the ray time %g is not between 0.0 and 1.0.", double(time));

@@ -5,7 +5,7 @@
 
 #include <cstdint>
 
-#include "api/validation.hpp"
+#include "api/validate/validator.hpp"
 
 namespace vkas {
 

@@ -10,7 +10,7 @@
 #include <cstdint>
 
 #include "api/device.hpp"
-#include "api/validation.hpp"
+#include "api/validate/validator.hpp"
 
 namespace vkas {
 

@@ -1,4 +1,4 @@
-#include "api/sphere_validation.hpp"
+#include "api/validate/swept_spheres.hpp"
 
 #include <cmath>
 

@@ -1,24 +1,21 @@
-#include "api/update_validation.hpp"
+#include "api/validate/update.hpp"
 
 #include <cstdio>
 
 #include <algorithm>
 
-#include "engine/input/build_inputs.hpp"
-#include "engine/format/layout.hpp"
+#include "api/build_geometry_info.hpp"
+#include "api/validate/parameters.hpp"
 #include "engine/build/refit.hpp"
+#include "engine/build/structure_build.hpp"
+#include "engine/format/layout.hpp"
+#include "engine/input/build_inputs.hpp"
 
 namespace vkas {
 
 namespace {
 
 using ull = unsigned long long;
-
-const VkAccelerationStructureGeometryKHR* geometryAt(const VkAccelerationStructureBuildGeometryInfoKHR& info,
-                                                     uint32_t i) {
-    if (info.pGeometries) return &info.pGeometries[i];
-    return info.ppGeometries ? info.ppGeometries[i] : nullptr;
-}
 
 bool aliases(const AccelerationStructure* a, const AccelerationStructure* b) {
     const auto pa = reinterpret_cast<uintptr_t>(a->block()), pb = reinterpret_cast<uintptr_t>(b->block());

@@ -1,43 +1,16 @@
-// Reports valid-usage violations the way the Khronos validation layers do: one message per violated rule,
-// severity ERROR, type VALIDATION, pMessageIdName = the full VUID. A command that found a violation does
-// nothing else and returns VK_ERROR_VALIDATION_FAILED_EXT.
+// The parameter rules every command shares: handles (-parameter, -parent, -commonparent), the allocator of a
+// vkDestroy*, pNext chains, and the deferredOperation of a deferrable command.
 #pragma once
+
+#include <vulkan/vulkan_core.h>
 
 #include <cstdint>
 #include <initializer_list>
 
 #include "api/device.hpp"
+#include "api/validate/validator.hpp"
 
 namespace vkas {
-
-class Validator {
-public:
-    Validator(const Device* device, const char* command);
-
-    bool enabled() const { return enabled_; }
-    bool failed() const { return failures_ != 0; }
-    uint32_t failureCount() const { return failures_; }
-
-    // Reports `vuid` with a printf-style message naming the offending info, geometry and value.
-    void fail(const char* vuid, const char* format, ...) __attribute__((format(printf, 3, 4)));
-    // Checks `ok`; reports when it is false. Returns ok.
-    template <class... Args>
-    bool check(bool ok, const char* vuid, const char* format, Args... args) {
-        if (!ok) {
-            if constexpr (sizeof...(Args) == 0)
-                fail(vuid, "%s", format);  // a message without arguments is printed as is
-            else
-                fail(vuid, format, args...);
-        }
-        return ok;
-    }
-
-private:
-    const Device* device_;
-    const char* command_;
-    bool enabled_;
-    uint32_t failures_ = 0;
-};
 
 // The Vulkan type name of an object magic, for messages.
 const char* objectTypeName(ObjectMagic magic);
@@ -73,5 +46,16 @@ void checkDestroyAllocator(Validator& v, const VkAllocationCallbacks& created, c
 // `pNextVuid` for any other structure and `uniqueVuid` for a repeated one. `name` names the chain's owner.
 void checkNextChain(Validator& v, const void* pNext, std::initializer_list<VkStructureType> allowed,
                     const char* pNextVuid, const char* uniqueVuid, const char* name);
+
+// The deferredOperation VUIDs of one deferrable command.
+struct DeferredOperationVuids {
+    const char* parameter;  // -deferredOperation-parameter: a live VkDeferredOperationKHR
+    const char* parent;     // -deferredOperation-parent: of this device
+    const char* pending;    // -deferredOperation-03678: no deferred command still pending on it
+};
+
+// Checks a deferrable command's deferredOperation parameter. VK_NULL_HANDLE is always valid.
+void checkDeferredOperation(Validator& v, const Device& device, VkDeferredOperationKHR operation,
+                            const DeferredOperationVuids& vuids);
 
 }  // namespace vkas
