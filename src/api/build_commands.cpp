@@ -33,7 +33,7 @@ VKAPI_ATTR VkResult VKAPI_CALL BuildAccelerationStructuresKHR(
         auto* dst = fromHandle<AccelerationStructure>(pInfos[i].dstAccelerationStructure);
         VkResult r;
         if (pInfos[i].mode == VK_BUILD_ACCELERATION_STRUCTURE_MODE_UPDATE_KHR) {
-            // A refit of the source's tree (engine/refit.hpp); src == dst refits in place.
+            // A refit of the source's tree (engine/build/refit.hpp); src == dst refits in place.
             const auto* src = fromHandle<AccelerationStructure>(pInfos[i].srcAccelerationStructure);
             const std::byte* srcBlock = src ? src->block() : nullptr;
             RefitJob job{&pInfos[i], ppBuildRangeInfos[i], srcBlock, dst->block(), dst->size,

@@ -1,7 +1,7 @@
 // The work of the copy, serialization and property commands, with plain parameters and no validation, so that a
 // command can run it at once or (later) from a deferred operation. Each function checks what it must to stay inside
 // the memory it was given (with validation on or off) and returns VK_ERROR_UNKNOWN when it cannot proceed, with
-// nothing written; deserialization checks its input completely (engine/format_check.hpp).
+// nothing written; deserialization checks its input completely (engine/format/check.hpp).
 #pragma once
 
 #include <vulkan/vulkan_core.h>

@@ -17,7 +17,7 @@ constexpr uint32_t kNodeWidth = 8;
 constexpr uint32_t kMaxPrimitivesPerLeaf = 4;  // triangles or AABBs
 constexpr uint32_t kMaxInstancesPerLeaf = 1;
 // Binary split depth after which the builder stops using the SAH and halves ranges instead. It bounds the tree
-// depth, which bounds the traversal stack a ray query carries (see traversal.hpp).
+// depth, which bounds the traversal stack a ray query carries (see trace/traversal_steps.hpp, kStackCapacity).
 constexpr uint32_t kSahDepthLimit = 32;
 constexpr uint32_t kMaxTreeDepth = kSahDepthLimit + 32;
 
@@ -163,7 +163,7 @@ struct InstanceRecord {
 static_assert(sizeof(InstanceRecord) == 128);
 
 // [NV-motion] Records of structures built with VK_BUILD_ACCELERATION_STRUCTURE_MOTION_BIT_NV (buildFlags in the
-// header tells them apart; traversal branches once per structure). See docs/FORMAT.md and engine/motion.hpp.
+// header tells them apart; traversal branches once per structure). See docs/FORMAT.md and format/motion.hpp.
 //
 // A motion top level stores one MotionInstanceRecord per active instance. `base` is an ordinary instance record:
 // for a static motion instance its transforms are the instance's; for matrix and SRT motion they are the
