@@ -2,7 +2,7 @@
 
 #include "vkas_side.hpp"
 
-#include <oracle.h>
+#include <oracle.hpp>
 
 #include <algorithm>
 #include <cstdarg>

@@ -1,4 +1,4 @@
-#include "diff_case.h"
+#include "diff_case.hpp"
 
 #include <cstring>
 #include <stdexcept>

@@ -1,4 +1,4 @@
-#include "lavapipe_side.h"
+#include "lavapipe_side.hpp"
 
 #include <vkas/vkas_compat.h>  // VK_KHR_ray_tracing_position_fetch, newer than Debian 12's Vulkan header
 
@@ -8,8 +8,8 @@
 #include <stdexcept>
 
 // SPIR-V of shaders/ray_program.comp, generated at build time by glslangValidator: with and without position fetch.
-#include "ray_program_fetch.h"
-#include "ray_program_nofetch.h"
+#include "ray_program_fetch.hpp"
+#include "ray_program_nofetch.hpp"
 
 namespace diff {
 

@@ -1,14 +1,14 @@
-#include "scene_gen.h"
+#include "scene_gen.hpp"
 
 #include <vkas/vkas_compat.h>
-#include <oracle.h>
-#include <vkas_test.h>
+#include <oracle.hpp>
+#include <vkas_test.hpp>
 
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
-#include "scene_writer.h"
+#include "scene_writer.hpp"
 
 namespace diff {
 

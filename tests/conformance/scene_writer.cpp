@@ -1,6 +1,6 @@
-#include "scene_writer.h"
+#include "scene_writer.hpp"
 
-#include <oracle.h>
+#include <oracle.hpp>
 
 #include <algorithm>
 #include <cmath>

@@ -1,5 +1,5 @@
-// Differential conformance: every case of scene_gen.h built and traced by vkas (host commands, host ray queries)
-// and by Mesa's lavapipe (device commands, GLSL ray queries), compared ray by ray through compare.h.
+// Differential conformance: every case of scene_gen.hpp built and traced by vkas (host commands, host ray queries)
+// and by Mesa's lavapipe (device commands, GLSL ray queries), compared ray by ray through compare.hpp.
 // docs/CONFORMANCE.md explains the accepted differences. Set VKAS_TEST_SEED to replay a run and
 // VKAS_DIFF_VARIANTS to change the number of cases per group (default 8).
 #include <gtest/gtest.h>
@@ -12,11 +12,11 @@
 #include <random>
 #include <string>
 
-#include "compare.h"
-#include "lavapipe_side.h"
-#include "reference.h"
-#include "scene_gen.h"
-#include "vkas_side.h"
+#include "compare.hpp"
+#include "lavapipe_side.hpp"
+#include "reference.hpp"
+#include "scene_gen.hpp"
+#include "vkas_side.hpp"
 
 namespace diff {
 namespace {

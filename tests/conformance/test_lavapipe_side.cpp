@@ -11,7 +11,7 @@
 #include <stdexcept>
 #include <tuple>
 
-#include "lavapipe_side.h"
+#include "lavapipe_side.hpp"
 
 namespace {
 

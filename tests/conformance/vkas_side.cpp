@@ -1,8 +1,8 @@
-#include "vkas_side.h"
+#include "vkas_side.hpp"
 
 #include <vkas/vkas.h>
 #include <vkas/vkas_compat.h>
-#include <vkas_test.h>
+#include <vkas_test.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -130,7 +130,7 @@ std::unique_ptr<VkasSide> VkasSide::create(std::string* why) {
 
 namespace {
 
-// The ray program of diff_case.h, on one ray.
+// The ray program of diff_case.hpp, on one ray.
 Result runProgram(VkAccelerationStructureKHR tlas, const Ray& ray, const ProceduralTables& tables) {
     Result out;
     std::memset(&out, 0, sizeof out);

@@ -9,7 +9,7 @@
 #include "engine/build/structure_build.hpp"
 #include "engine/format/check.hpp"
 #include "engine/format/layout.hpp"
-#include "vkas_test.h"
+#include "vkas_test.hpp"
 
 namespace {
 

@@ -10,7 +10,7 @@
 #include "engine/trace/node_test_avx2.hpp"
 #include "engine/trace/node_test_sse.hpp"
 #include "engine/trace/ray.hpp"
-#include "vkas_test.h"
+#include "vkas_test.hpp"
 
 namespace {
 

@@ -13,7 +13,7 @@
 #include "engine/build/tree_builder.hpp"
 #include "engine/format/sizes.hpp"
 #include "engine/util/parallel_for.hpp"
-#include "vkas_test.h"
+#include "vkas_test.hpp"
 
 namespace {
 

@@ -7,7 +7,7 @@
 
 #include "engine/trace/ray.hpp"
 #include "engine/trace/triangle_test.hpp"
-#include "vkas_test.h"
+#include "vkas_test.hpp"
 
 namespace {
 
@@ -65,8 +65,9 @@ TEST_F(TriangleTest, agrees_with_a_double_precision_oracle_away_from_edges) {
         ASSERT_NEAR(h.t, t, 1e-3 * scale) << "iteration " << iter;
         ASSERT_NEAR(h.b, b, 1e-3) << "iteration " << iter;
         ASSERT_NEAR(h.c, c, 1e-3) << "iteration " << iter;
-        // frontFace: the ray sees the vertices counter-clockwise, i.e. it runs against the normal e1 x e2.
-        ASSERT_EQ(h.frontFace, det < 0.0) << "iteration " << iter;
+        // frontFace: the ray sees the vertices counter-clockwise, i.e. it runs against the normal e1 x e2, where
+        // Moller-Trumbore's determinant e1 . (d x e2) = -d . (e1 x e2) is positive.
+        ASSERT_EQ(h.frontFace, det > 0.0) << "iteration " << iter;
     }
     EXPECT_GT(hits, 1000);
     EXPECT_GT(misses, 1000);

@@ -1,5 +1,5 @@
-// The replacement operator new/delete of alloc_failure.h. Linked into vkas_test_out_of_memory only.
-#include "alloc_failure.h"
+// The replacement operator new/delete of alloc_failure.hpp. Linked into vkas_test_out_of_memory only.
+#include "alloc_failure.hpp"
 
 #include <malloc.h>
 

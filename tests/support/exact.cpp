@@ -1,4 +1,4 @@
-#include "exact.h"
+#include "exact.hpp"
 
 #include <algorithm>
 #include <cassert>

@@ -1,4 +1,4 @@
-#include "meshes.h"
+#include "meshes.hpp"
 
 #include <cmath>
 #include <map>

@@ -1,4 +1,4 @@
-#include "oracle.h"
+#include "oracle.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -10,7 +10,7 @@
 #include <limits>
 #include <stdexcept>
 
-#include "oracle.h"
+#include "oracle.hpp"
 
 namespace oracle {
 

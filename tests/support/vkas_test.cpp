@@ -1,4 +1,4 @@
-#include "vkas_test.h"
+#include "vkas_test.hpp"
 
 #include <algorithm>
 #include <cinttypes>

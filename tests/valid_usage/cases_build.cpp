@@ -2,8 +2,8 @@
 // infos, instances, updates), including the NV motion, sphere and LSS geometry.
 #include <limits>
 
-#include "harness.h"
-#include "meshes.h"
+#include "harness.hpp"
+#include "meshes.hpp"
 
 namespace vu {
 

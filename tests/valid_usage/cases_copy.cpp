@@ -1,6 +1,6 @@
 // Valid-usage cases: vkCopyAccelerationStructureKHR, serialization (vkCopyAccelerationStructureToMemoryKHR) and
 // deserialization (vkCopyMemoryToAccelerationStructureKHR).
-#include "harness.h"
+#include "harness.hpp"
 
 namespace vu {
 

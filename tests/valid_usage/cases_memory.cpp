@@ -1,5 +1,5 @@
 // Valid-usage cases: buffers, device memory and the device itself.
-#include "harness.h"
+#include "harness.hpp"
 
 namespace vu {
 

@@ -1,6 +1,6 @@
 // Valid-usage cases: acceleration-structure objects (create, destroy, address), the build-size query and deferred
 // operations.
-#include "harness.h"
+#include "harness.hpp"
 
 namespace vu {
 

@@ -3,7 +3,7 @@
 #include <array>
 #include <limits>
 
-#include "harness.h"
+#include "harness.hpp"
 
 namespace vu {
 

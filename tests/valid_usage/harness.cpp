@@ -1,10 +1,10 @@
-#include "harness.h"
+#include "harness.hpp"
 
 #include <algorithm>
 #include <cstring>
 #include <regex>
 
-#include "meshes.h"
+#include "meshes.hpp"
 
 namespace vu {
 

@@ -8,7 +8,7 @@
 #include <set>
 #include <sstream>
 
-#include "harness.h"
+#include "harness.hpp"
 
 namespace vu {
 namespace {

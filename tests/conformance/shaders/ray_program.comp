@@ -1,4 +1,4 @@
-// The ray program of tests/conformance/diff_case.h, one invocation per ray. Compiled twice at build time: with
+// The ray program of tests/conformance/diff_case.hpp, one invocation per ray. Compiled twice at build time: with
 // VKAS_POSITION_FETCH defined (the device has rayTracingPositionFetch) and without (a module that declares the
 // RayQueryPositionFetchKHR capability may not be used on a device without the feature).
 #version 460
