@@ -16,6 +16,7 @@
 #include "api/validate/parameters.hpp"
 #include "engine/format/layout.hpp"
 #include "engine/format/check.hpp"
+#include "engine/format/convert.hpp"
 #include "engine/format/serialize.hpp"
 
 namespace vkas {
@@ -146,7 +147,8 @@ VkResult deserializeAccelerationStructure(const Device& device, const void* src,
         fail(VK_ERROR_OUT_OF_HOST_MEMORY);  // the slot table or the address index: dst holds no structure
         throw;
     }
-    std::memcpy(to, view.block, view.deserializedSize);
+    // A block of format 1 (an earlier release's) is written in format 2 (format/convert.hpp); it only shrinks.
+    format::convertToCurrentFormat(view.block, to);
     serial::bindReferences(view, to, referenceOfSlot.data());
     dst.constructed = true;
     return VK_SUCCESS;

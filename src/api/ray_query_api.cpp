@@ -184,7 +184,7 @@ VKAS_API void vkasRayQueryGetIntersectionWorldToObject(const VkasRayQuery* q, Vk
 VKAS_API void vkasRayQueryGetIntersectionTriangleVertexPositions(const VkasRayQuery* q, VkBool32 committed,
                                                                  float out[3][3]) {
     const QueryHit& h = hit(q, committed);  // AABB candidates and generated hits have no triangle: zeros
-    if (h.triangle && h.instance) {
+    if (h.isTriangle && h.instance) {
         // Positions are kept for every build, but the rule asks for ALLOW_DATA_ACCESS on the hit's structure.
         const std::byte* blas = vkas::resolveAccelerationStructure(h.instance->reference);
         const auto* query = reinterpret_cast<const QueryObject*>(q->opaque);
@@ -197,13 +197,9 @@ VKAS_API void vkasRayQueryGetIntersectionTriangleVertexPositions(const VkasRayQu
                      committed ? "committed" : "candidate"))
             return;
     }
-    if (h.triangle && (h.triangle->flags & vkas::format::kTriangleMotion)) {
-        // [NV-motion] The positions at the ray time: the triangle that was intersected.
-        const auto* rec = reinterpret_cast<const vkas::format::MotionTriangleRecord*>(h.triangle);
-        for (int j = 0; j < 3; ++j)
-            for (int c = 0; c < 3; ++c) out[j][c] = vkas::motion::lerp(rec->base.v[j][c], rec->v1[j][c], state(q).time);
-    } else if (h.triangle)
-        std::memcpy(out, h.triangle->v, 9 * sizeof(float));
+    // The positions the intersection used ([NV-motion] those at the ray time), kept with the hit.
+    if (h.isTriangle)
+        std::memcpy(out, h.trianglePositions, 9 * sizeof(float));
     else
         std::memset(out, 0, 9 * sizeof(float));
 }
@@ -212,7 +208,7 @@ VKAS_API uint32_t vkasRayQueryGetIntersectionPrimitiveType(const VkasRayQuery* q
     const QueryHit& h = hit(q, committed);
     if (committed ? h.type == VKAS_COMMITTED_INTERSECTION_NONE : !state(q).candidatePending)
         return VKAS_INTERSECTION_PRIMITIVE_NONE;
-    return h.triangle ? VKAS_INTERSECTION_PRIMITIVE_TRIANGLE
+    return h.isTriangle ? VKAS_INTERSECTION_PRIMITIVE_TRIANGLE
            : h.aabb   ? VKAS_INTERSECTION_PRIMITIVE_AABB
            : h.sphere ? VKAS_INTERSECTION_PRIMITIVE_SPHERE
            : h.lss    ? VKAS_INTERSECTION_PRIMITIVE_LSS

@@ -56,8 +56,7 @@ VKAPI_ATTR void VKAPI_CALL GetAccelerationStructureBuildSizesKHR(
     }
     uint64_t primitives = 0;
     for (uint32_t g = 0; g < pBuildInfo->geometryCount; ++g) primitives += pMaxPrimitiveCounts[g];
-    StructureSizes s = structureSizes(structureType(pBuildInfo->type), pBuildInfo->geometryCount, primitives,
-                                      usesMotionRecords(*pBuildInfo));
+    StructureSizes s = structureSizes(*pBuildInfo, primitives);
     pSizeInfo->accelerationStructureSize = s.structureSize;
     pSizeInfo->buildScratchSize = s.buildScratchSize;
     pSizeInfo->updateScratchSize = s.updateScratchSize;

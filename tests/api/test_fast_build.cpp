@@ -38,6 +38,7 @@ public:
         nodeOffset_ = load<uint64_t>(b_ + 80);
         recordOffset_ = load<uint64_t>(b_ + 88);
         topLevel_ = load<uint32_t>(b_ + 8) == 0;
+        if (!topLevel_) records48_ = vt::triangleRecordsOf(b_);
     }
 
     void run() {
@@ -71,7 +72,7 @@ private:
     // The box of a record: triangle vertices; top level: none checked here (instance boxes are not stored).
     bool recordBox(uint64_t r, Box& box) const {
         if (topLevel_) return false;
-        const uint8_t* rec = b_ + recordOffset_ + r * 48;
+        const uint8_t* rec = records48_.data() + r * 48;
         for (int a = 0; a < 3; ++a) box.lo[a] = INFINITY, box.hi[a] = -INFINITY;
         for (int v = 0; v < 3; ++v)
             for (int a = 0; a < 3; ++a) {
@@ -132,6 +133,7 @@ private:
     uint32_t primitives_ = 0, records_ = 0, nodes_ = 0;
     uint64_t nodeOffset_ = 0, recordOffset_ = 0;
     bool topLevel_ = false;
+    std::vector<uint8_t> records48_;  // the triangles as 48-byte records (vt::triangleRecordsOf)
     std::vector<uint8_t> visited_;
     std::vector<uint8_t> covered_;
     uint32_t maxDepth_ = 0;

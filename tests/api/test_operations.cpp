@@ -665,7 +665,7 @@ TEST_F(operations_misc, serialized_header) {
     for (AccelStruct* as : {blas, tlas}) {
         Blob b = serialize(as);
         EXPECT_EQ(0, std::memcmp(b.data, "VKAS-SERIALIZED2", 16));
-        EXPECT_EQ(0, std::memcmp(b.data + 16, "VKAS-AS-FORMAT-1", 16));
+        EXPECT_EQ(0, std::memcmp(b.data + 16, "VKAS-AS-FORMAT-2", 16));
         const uint64_t used = usedSize(as);
         EXPECT_EQ(b.deserializedSize(), used);
         const uint64_t n = as == tlas ? instances.size() : 0;
@@ -1255,7 +1255,8 @@ TEST_F(operations_corrupt, malformed_blobs_are_rejected) {
     };
     const BlockHeader h = readBlockHeader(blas->data());
     expectRejectedSealedOrNot(inBlock(bb, 0, 0x12345678, 4), BL, "magic");
-    expectRejectedSealedOrNot(inBlock(bb, 4, 2, 4), BL, "version");
+    expectRejectedSealedOrNot(inBlock(bb, 4, 3, 4), BL, "version");
+    expectRejectedSealedOrNot(inBlock(bb, 4, 1, 4), BL, "version 1 under the compatibility UUID of format 2");
     expectRejectedSealedOrNot(inBlock(bb, 8, 7, 4), BL, "type");
     expectRejectedSealedOrNot(inBlock(bb, 16, h.usedSize + 64, 8), BL, "usedSize");
     expectRejectedSealedOrNot(inBlock(bb, 96, 2, 4), BL, "primitive type");
@@ -1267,7 +1268,7 @@ TEST_F(operations_corrupt, malformed_blobs_are_rejected) {
     // Sections out of order (found by the deserialization fuzzer: the size differences wrapped and passed, and the
     // geometry table or the nodes were read past usedSize): rejected by the rule that names it.
     for (const auto& [offset, value, what] :
-         {std::tuple<size_t, uint64_t, const char*>{72, h.usedSize - 8, "geometry table after the nodes"},
+         {std::tuple<size_t, uint64_t, const char*>{72, (h.usedSize - 8) & ~7ull, "geometry table after the nodes"},
           {80, h.recordOffset + 64, "nodes after the records"}}) {
         Blob b = inBlock(bb, offset, value, 8);
         expectRejectedSealedOrNot(b, BL, what);
@@ -1297,8 +1298,17 @@ TEST_F(operations_corrupt, malformed_blobs_are_rejected) {
     expectRejectedSealedOrNot(inBlock(bb, child0, 3ull << 62, 8), BL, "an unknown reference kind");
     expectRejectedSealedOrNot(inBlock(bb, 24, (1ull << 62) | 1, 8), BL, "root not at node 0 (node 0 unreachable)");
     // Records.
-    expectRejectedSealedOrNot(inBlock(bb, h.recordOffset + 36, 5, 4), BL, "geometry index");
-    expectRejectedSealedOrNot(inBlock(bb, h.recordOffset + 40, 1u << 20, 4), BL, "primitive index");
+    // Format 2 triangle leaves (docs/FORMAT.md): the leaf of triangle 0 has n lanes, its primitive indices at 36 n
+    // and its geometry words at 40 n bytes from its start.
+    uint64_t firstLeafLanes = 0;
+    for (uint32_t k = 0; k < h.nodeCount && !firstLeafLanes; ++k)
+        for (uint32_t c = 0; c < 8; ++c) {
+            const uint64_t ref = load64(blas->data() + h.nodeOffset + 256ull * k + 192 + 8 * c);
+            if ((ref >> 62) == 2 && (ref & 0xFF'FFFF'FFFFull) == 0) firstLeafLanes = (ref >> 40) & 0xFF;
+        }
+    ASSERT_NE(firstLeafLanes, 0u);
+    expectRejectedSealedOrNot(inBlock(bb, h.recordOffset + 40 * firstLeafLanes, 5, 4), BL, "geometry index");
+    expectRejectedSealedOrNot(inBlock(bb, h.recordOffset + 36 * firstLeafLanes, 1u << 20, 4), BL, "primitive index");
     const BlockHeader th = readBlockHeader(tlas->data());
     expectRejectedSealedOrNot(inBlock(tb, th.recordOffset + 112, 1000, 4), TL, "instanceId");
     expectRejectedSealedOrNot(inBlock(tb, th.recordOffset + 116, 1, 4), TL, "motion type of a static record");

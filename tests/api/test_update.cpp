@@ -1670,13 +1670,15 @@ bool sameBoxCoordinate(float a, float b) { return std::memcmp(&a, &b, 4) == 0 ||
     const uint64_t nodeEnd = nodeOffset + 256ull * nodeCount;
     if (std::memcmp(src.data() + nodeEnd, dst + nodeEnd, recordOffset - nodeEnd))
         return ::testing::AssertionFailure() << "gap changed";
+    const std::vector<uint8_t> srcRecords = vt::triangleRecordsOf(src.data()), dstRecords = vt::triangleRecordsOf(dst);
     for (uint32_t j = 0; j < recordCount; ++j) {
-        const uint64_t r = recordOffset + 48ull * j;
-        if (std::memcmp(src.data() + r + 36, dst + r + 36, 8) ||
-            (load<uint32_t>(src.data() + r + 44) & ~2u) != (load<uint32_t>(dst + r + 44) & ~2u))
+        const uint64_t r = 48ull * j;
+        if (std::memcmp(srcRecords.data() + r + 36, dstRecords.data() + r + 36, 8) ||
+            (load<uint32_t>(srcRecords.data() + r + 44) & ~2u) != (load<uint32_t>(dstRecords.data() + r + 44) & ~2u))
             return ::testing::AssertionFailure() << "record " << j << " names another primitive or changed flags";
     }
-    if (recordOffset + 48ull * recordCount != used) return ::testing::AssertionFailure() << "usedSize";
+    if (recordOffset + 44ull * recordCount + (recordCount ? 4 : 0) != used)
+        return ::testing::AssertionFailure() << "usedSize";
     auto slotBox = [&](uint64_t ref, float lo[3], float hi[3]) -> bool {
         for (int c = 0; c < 3; ++c) lo[c] = INFINITY, hi[c] = -INFINITY;
         const uint64_t kind = ref >> 62;
@@ -1685,7 +1687,7 @@ bool sameBoxCoordinate(float a, float b) { return std::memcmp(&a, &b, 4) == 0 ||
             for (uint64_t j = first; j < first + count; ++j)
                 for (int v = 0; v < 3; ++v)
                     for (int c = 0; c < 3; ++c) {
-                        const float x = load<float>(dst + recordOffset + 48 * j + 12 * v + 4 * c);
+                        const float x = load<float>(dstRecords.data() + 48 * j + 12 * v + 4 * c);
                         if (x < lo[c]) lo[c] = x;  // NaN never compares
                         if (x > hi[c]) hi[c] = x;
                     }
@@ -1769,10 +1771,12 @@ TEST_F(update, specialised_refit_matches_build_for_every_format) {
                 const uint32_t n = load<uint32_t>(out->data() + 64);
                 ASSERT_EQ(load<uint32_t>(fresh->data() + 64), n);
                 std::map<uint64_t, const uint8_t*> byPrimitive;
-                const uint8_t* freshRecords = fresh->data() + load<uint64_t>(fresh->data() + 88);
+                const std::vector<uint8_t> freshCopy = vt::triangleRecordsOf(fresh->data());
+                const uint8_t* freshRecords = freshCopy.data();
                 for (uint32_t j = 0; j < n; ++j)
                     byPrimitive[load<uint64_t>(freshRecords + 48ull * j + 36)] = freshRecords + 48ull * j;
-                const uint8_t* outRecords = out->data() + load<uint64_t>(out->data() + 88);
+                const std::vector<uint8_t> outCopy = vt::triangleRecordsOf(out->data());
+                const uint8_t* outRecords = outCopy.data();
                 for (uint32_t j = 0; j < n; ++j) {
                     const uint8_t* r = outRecords + 48ull * j;
                     auto found = byPrimitive.find(load<uint64_t>(r + 36));
@@ -1833,9 +1837,11 @@ TEST_F(update, specialised_refit_mixed_geometries) {
         const uint32_t n = load<uint32_t>(out->data() + 64);
         ASSERT_EQ(load<uint32_t>(fresh->data() + 64), n);
         std::map<uint64_t, const uint8_t*> byPrimitive;
-        const uint8_t* fr = fresh->data() + load<uint64_t>(fresh->data() + 88);
+        const std::vector<uint8_t> freshCopy = vt::triangleRecordsOf(fresh->data());
+        const uint8_t* fr = freshCopy.data();
         for (uint32_t j = 0; j < n; ++j) byPrimitive[load<uint64_t>(fr + 48ull * j + 36)] = fr + 48ull * j;
-        const uint8_t* orec = out->data() + load<uint64_t>(out->data() + 88);
+        const std::vector<uint8_t> outCopy = vt::triangleRecordsOf(out->data());
+        const uint8_t* orec = outCopy.data();
         for (uint32_t j = 0; j < n; ++j) {
             auto found = byPrimitive.find(load<uint64_t>(orec + 48ull * j + 36));
             ASSERT_NE(found, byPrimitive.end());

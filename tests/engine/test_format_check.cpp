@@ -38,15 +38,15 @@ struct FormatCheck : ::testing::Test {
         t.maxVertex = 3 * triangles - 1;
         t.indexType = VK_INDEX_TYPE_NONE_KHR;
         VkAccelerationStructureBuildRangeInfoKHR range{triangles, 0, 0, 0};
-        const StructureSizes sizes = structureSizes(format::StructureType::BottomLevel, 1, triangles);
-        std::vector<std::byte> scratch(sizes.buildScratchSize);
-        block.assign(sizes.structureSize, std::byte{0xAA});
         VkAccelerationStructureBuildGeometryInfoKHR info{};
         info.sType = VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_BUILD_GEOMETRY_INFO_KHR;
         info.type = VK_ACCELERATION_STRUCTURE_TYPE_BOTTOM_LEVEL_KHR;
         info.mode = VK_BUILD_ACCELERATION_STRUCTURE_MODE_BUILD_KHR;
         info.geometryCount = 1;
         info.pGeometries = &geometry;
+        const StructureSizes sizes = structureSizes(info, triangles);
+        std::vector<std::byte> scratch(sizes.buildScratchSize);
+        block.assign(sizes.structureSize, std::byte{0xAA});
         info.scratchData.hostAddress = scratch.data();
         BuildJob job{&info, &range, block.data(), block.size(), nullptr};
         ASSERT_EQ(buildAccelerationStructure(job), VK_SUCCESS);
@@ -101,6 +101,27 @@ TEST_F(FormatCheck, every_kind_of_damage_is_refused) {
         for (auto& c : nodes[0].child)
             if (format::isInternal(c)) c = format::makeLeafRef(hh.recordCount, 1);
         EXPECT_EQ(format::checkBlock(copy.data(), copy.size()).status, CheckStatus::Corrupt) << "a leaf past the records";
+    }
+    // A triangle leaf lane (format 2) naming a geometry or primitive the structure does not have.
+    {
+        const format::Header hh = headerCopy();
+        const auto* nodes = reinterpret_cast<const format::Node*>(block.data() + hh.nodeOffset);
+        format::ChildRef leaf = format::kEmptyRef;
+        for (const auto c : nodes[0].child)
+            if (format::isLeaf(c)) leaf = c;
+        if (leaf == format::kEmptyRef)  // node 0 has only internal children: take a leaf of its first child
+            for (const auto c : nodes[format::nodeIndex(nodes[0].child[0])].child)
+                if (format::isLeaf(c)) leaf = c;
+        ASSERT_NE(leaf, format::kEmptyRef);
+        std::vector<std::byte> copy = block;
+        format::MutableTriangleLeaf lanes =
+            format::triangleLeaf(copy.data() + hh.recordOffset, format::leafFirst(leaf), format::leafCount(leaf));
+        lanes.geometryAndFlags()[lanes.n - 1] += 1;  // geometry 1 of a structure with one
+        EXPECT_EQ(format::checkBlock(copy.data(), copy.size()).status, CheckStatus::Corrupt) << "a lane's geometry";
+        copy = block;
+        lanes = format::triangleLeaf(copy.data() + hh.recordOffset, format::leafFirst(leaf), format::leafCount(leaf));
+        lanes.primitiveIndex()[0] = 500;
+        EXPECT_EQ(format::checkBlock(copy.data(), copy.size()).status, CheckStatus::Corrupt) << "a lane's primitive";
     }
     // Every truncation: refused, and nothing read past the end (the sanitizer build would see it).
     for (uint64_t size = 0; size < block.size(); size += 1 + size / 8) {

@@ -21,6 +21,31 @@ uint64_t chooseSeed() {
 }
 
 // ---- Math -------------------------------------------------------------------------------------------------------
+std::vector<uint8_t> triangleRecordsOf(const uint8_t* block) {
+    auto load32 = [](const uint8_t* p) { uint32_t v; std::memcpy(&v, p, 4); return v; };
+    auto load64 = [](const uint8_t* p) { uint64_t v; std::memcpy(&v, p, 8); return v; };
+    const uint32_t recordCount = load32(block + 64), nodeCount = load32(block + 68);
+    const uint64_t nodeOffset = load64(block + 80), recordOffset = load64(block + 88);
+    std::vector<uint8_t> out(48ull * recordCount, 0);
+    auto unpack = [&](uint64_t ref) {
+        if ((ref >> 62) != 2) return;
+        const uint64_t first = ref & 0xFF'FFFF'FFFFull;
+        const uint32_t n = uint32_t(ref >> 40) & 0xFF;
+        const uint8_t* leaf = block + recordOffset + 44 * first;
+        for (uint32_t l = 0; l < n && first + l < recordCount; ++l) {
+            uint8_t* r = out.data() + 48 * (first + l);
+            for (uint32_t row = 0; row < 9; ++row) std::memcpy(r + 4 * row, leaf + 4 * (row * n + l), 4);
+            const uint32_t primitive = load32(leaf + 4 * (9 * n + l)), gf = load32(leaf + 4 * (10 * n + l));
+            const uint32_t geometry = gf & 0xFFFFFFu, flags = gf >> 24;
+            std::memcpy(r + 36, &geometry, 4), std::memcpy(r + 40, &primitive, 4), std::memcpy(r + 44, &flags, 4);
+        }
+    };
+    unpack(load64(block + 24));
+    for (uint32_t k = 0; k < nodeCount; ++k)
+        for (uint32_t c = 0; c < 8; ++c) unpack(load64(block + nodeOffset + 256ull * k + 192 + 8 * c));
+    return out;
+}
+
 VkTransformMatrixKHR identityTransform() {
     VkTransformMatrixKHR m{};
     m.matrix[0][0] = m.matrix[1][1] = m.matrix[2][2] = 1.0f;

@@ -66,6 +66,11 @@ struct Commands {
 
 // ---- Math helpers -----------------------------------------------------------------------------------------------
 using Float3 = std::array<float, 3>;
+// The triangles of a (non-motion) bottom level of triangles, read from its bytes by docs/FORMAT.md (format 2 leaves),
+// as 48-byte records in triangle order: 9 floats (v0, v1, v2), geometryIndex, primitiveIndex, flags (u32 each), the
+// layout format 1 stored. Tests that look at the records use it, whatever the leaf layout.
+std::vector<uint8_t> triangleRecordsOf(const uint8_t* block);
+
 VkTransformMatrixKHR identityTransform();
 VkTransformMatrixKHR translation(float x, float y, float z);
 // Product a*b of two affine 3x4 transforms.

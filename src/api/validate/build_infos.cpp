@@ -141,8 +141,7 @@ void checkBuildInfo(Validator& v, const Device& dev, const VkAccelerationStructu
         }
     }
     if (dst && info.type != VK_ACCELERATION_STRUCTURE_TYPE_GENERIC_KHR) {
-        StructureSizes sizes =
-            structureSizes(structureType(info.type), info.geometryCount, total, usesMotionRecords(info));
+        StructureSizes sizes = structureSizes(info, total);
         // An update may also go into a structure of the source's compacted size: a refit writes usedSize bytes.
         const uint64_t needed =
             updateSrc ? std::min(sizes.structureSize, format::header(updateSrc)->usedSize) : sizes.structureSize;

@@ -5,6 +5,7 @@
 
 #include <immintrin.h>
 
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
@@ -12,6 +13,7 @@
 
 #include "engine/build/refit.hpp"
 #include "engine/format/layout.hpp"
+#include "engine/format/sizes.hpp"
 #include "engine/input/build_inputs.hpp"
 #include "engine/util/math.hpp"
 #include "engine/util/simd_box.hpp"
@@ -92,6 +94,9 @@ void refitTree(const RefitJob& job, Refitter& refit) {
     if (job.src != job.dst) {  // the parts a refit does not change: header, geometry table, the zeroed gaps
         std::memcpy(job.dst, job.src, h.nodeOffset);
         std::memcpy(job.dst + nodeEnd, job.src + nodeEnd, h.recordOffset - nodeEnd);
+        // and what follows the records (the zero tail of triangle leaves, layout.hpp)
+        const uint64_t recordEnd = h.recordOffset + uint64_t(h.recordCount) * recordSize(h.type, h.primitiveType, h.buildFlags);
+        if (h.usedSize > recordEnd) std::memcpy(job.dst + recordEnd, job.src + recordEnd, h.usedSize - recordEnd);
     }
     const auto* srcNodes = reinterpret_cast<const Node*>(job.src + h.nodeOffset);
     auto* dstNodes = reinterpret_cast<Node*>(job.dst + h.nodeOffset);
@@ -142,10 +147,25 @@ struct RecordKey {
     uint32_t geometry, primitive;
 };
 
-// VUIDs 03663 / 03664 with a kind's probe: probe.key(records, j) names record j's primitive, probe.probe(g, i,
-// active, storable) says whether input primitive i of geometry g is active (not inactive by the spec's rules: NaN,
-// reference 0) and storable (what a build would store: active and valid; degenerate ones count, as ALLOW_UPDATE
-// builds keep them).
+// Calls fn(ref) for every leaf of the structure at `block`, in the order of their records (leafFirst).
+template <class Fn>
+void forEachLeaf(const std::byte* block, const Fn& fn) {
+    const format::Header* h = format::header(block);
+    std::vector<ChildRef> leaves;
+    if (isLeaf(h->root)) leaves.push_back(h->root);
+    const Node* nodes = format::nodes(block);
+    for (uint64_t k = 0; k < h->nodeCount; ++k)
+        for (const ChildRef ref : nodes[k].child)
+            if (isLeaf(ref)) leaves.push_back(ref);
+    std::sort(leaves.begin(), leaves.end(), [](ChildRef a, ChildRef b) { return leafFirst(a) < leafFirst(b); });
+    for (const ChildRef ref : leaves) fn(ref);
+}
+
+// VUIDs 03663 / 03664 with a kind's probe: probe.key(records, j) names record j's primitive (or, for records that are
+// not an array, probe.forEachKey(block, fn) calls fn with every stored primitive's key in record order),
+// probe.probe(g, i, active, storable) says whether input primitive i of geometry g is active (not inactive by the
+// spec's rules: NaN, reference 0) and storable (what a build would store: active and valid; degenerate ones count,
+// as ALLOW_UPDATE builds keep them).
 template <class Probe>
 ActivityViolation checkActivity(const RefitJob& job, Probe& probe) {
     const format::Header* h = format::header(job.src);
@@ -153,16 +173,24 @@ ActivityViolation checkActivity(const RefitJob& job, Probe& probe) {
     std::vector<uint64_t> base(info.geometryCount + 1, 0);
     for (uint32_t g = 0; g < info.geometryCount; ++g) base[g + 1] = base[g] + job.ranges[g].primitiveCount;
     std::vector<uint64_t> stored((base[info.geometryCount] + 63) / 64, 0);
-    const std::byte* records = job.src + h->recordOffset;
-    for (uint64_t j = 0; j < h->recordCount; ++j) {
-        const RecordKey key = probe.key(records, j);
-        if (key.geometry >= info.geometryCount || key.primitive >= job.ranges[key.geometry].primitiveCount) continue;
+    ActivityViolation found{};
+    bool stop = false;
+    auto visitKey = [&](const RecordKey& key) {
+        if (stop) return;
+        if (key.geometry >= info.geometryCount || key.primitive >= job.ranges[key.geometry].primitiveCount) return;
         const uint64_t bit = base[key.geometry] + key.primitive;
         stored[bit / 64] |= 1ull << (bit % 64);
         bool active, storable;
         probe.probe(key.geometry, key.primitive, active, storable);
-        if (!active) return {3663, key.geometry, key.primitive};
+        if (!active) found = {3663, key.geometry, key.primitive}, stop = true;
+    };
+    if constexpr (requires { probe.forEachKey(job.src, visitKey); }) {
+        probe.forEachKey(job.src, visitKey);
+    } else {
+        const std::byte* records = job.src + h->recordOffset;
+        for (uint64_t j = 0; j < h->recordCount && !stop; ++j) visitKey(probe.key(records, j));
     }
+    if (stop) return found;
     for (uint32_t g = 0; g < info.geometryCount; ++g) {
         for (uint32_t i = 0; i < job.ranges[g].primitiveCount; ++i) {
             const uint64_t bit = base[g] + i;

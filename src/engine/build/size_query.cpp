@@ -2,15 +2,26 @@
 
 #include "engine/build/tree_builder.hpp"
 #include "engine/format/sizes.hpp"
+#include "engine/input/build_inputs.hpp"
 
 namespace vkas {
 
-StructureSizes structureSizes(format::StructureType type, uint32_t geometryCount, uint64_t primitiveCount,
-                              bool motion) {
+uint64_t gatheredRecordSize(format::StructureType type, bool motion) {
+    if (type == format::StructureType::TopLevel)
+        return motion ? sizeof(format::MotionInstanceRecord) : sizeof(format::InstanceRecord);
+    return motion ? sizeof(format::MotionTriangleRecord) : sizeof(format::TriangleRecord);
+}
+
+StructureSizes structureSizes(const VkAccelerationStructureBuildGeometryInfoKHR& info, uint64_t primitiveCount) {
+    const format::StructureType type = info.type == VK_ACCELERATION_STRUCTURE_TYPE_TOP_LEVEL_KHR
+                                           ? format::StructureType::TopLevel
+                                           : format::StructureType::BottomLevel;
+    const bool motion = usesMotionRecords(info);
     StructureSizes s;
-    s.structureSize = maxStructureSize(type, geometryCount, primitiveCount, motion);
-    s.buildScratchSize =
-        primitiveCount == 0 ? 0 : kScratchAlignment + primitiveCount * (sizeof(PrimRef) + recordSize(type, motion));
+    s.structureSize = maxStructureSize(type, recordPrimitiveType(info), info.geometryCount, primitiveCount, motion);
+    s.buildScratchSize = primitiveCount == 0
+                             ? 0
+                             : kScratchAlignment + primitiveCount * (sizeof(PrimRef) + gatheredRecordSize(type, motion));
     s.updateScratchSize = 0;  // a refit works in the structure itself (build/refit.hpp)
     return s;
 }

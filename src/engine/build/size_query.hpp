@@ -18,9 +18,13 @@ struct StructureSizes {
     uint64_t updateScratchSize;
 };
 
-// A safe upper bound for any build of `primitiveCount` primitives (or instances) in `geometryCount` geometries.
-StructureSizes structureSizes(format::StructureType type, uint32_t geometryCount, uint64_t primitiveCount,
-                              bool motion = false);
+// A safe upper bound for any build of `info`'s kind (type, record type, motion, geometry count) of `primitiveCount`
+// primitives (or instances).
+StructureSizes structureSizes(const VkAccelerationStructureBuildGeometryInfoKHR& info, uint64_t primitiveCount);
+
+// Bytes of the temporary record a build gathers per primitive into its scratch (a format::TriangleRecord for
+// triangles, whatever their stored form; the stored record for every other kind).
+uint64_t gatheredRecordSize(format::StructureType type, bool motion);
 
 constexpr uint64_t kScratchAlignment = 64;
 

@@ -75,19 +75,6 @@ void writeGeometryDescs(std::byte* dst, const BuildJob& job) {
 }
 
 
-// The VkGeometryTypeKHR of the records. All geometries of a bottom-level structure have one type (VUID 03792):
-// geometry 0 names it; anything but AABBs, spheres and LSS is read as triangles.
-VkGeometryTypeKHR primitiveTypeOf(const VkAccelerationStructureBuildGeometryInfoKHR& info) {
-    if (info.type == VK_ACCELERATION_STRUCTURE_TYPE_TOP_LEVEL_KHR) return VK_GEOMETRY_TYPE_INSTANCES_KHR;
-    if (info.geometryCount != 0) {
-        const VkGeometryTypeKHR first = buildGeometry(info, 0).geometryType;
-        if (first == VK_GEOMETRY_TYPE_AABBS_KHR || first == VK_GEOMETRY_TYPE_SPHERES_NV ||
-            first == VK_GEOMETRY_TYPE_LINEAR_SWEPT_SPHERES_NV)
-            return first;
-    }
-    return VK_GEOMETRY_TYPE_TRIANGLES_KHR;
-}
-
 // The primitives (or instances) given to the build, inactive ones included: a top level has one geometry (VUID
 // 03790), whose instances count.
 uint64_t primitiveTotal(const BuildJob& job) {
@@ -109,7 +96,7 @@ void copyRecords(std::byte* records, const std::byte* temp, const PrimRef* refs,
 void copyInTreeOrder(uint64_t recordSize, std::byte* records, const std::byte* temp, const PrimRef* refs,
                      uint64_t begin, uint64_t end) {
     switch (recordSize) {
-        case sizeof(TriangleRecord): return copyRecords<sizeof(TriangleRecord)>(records, temp, refs, begin, end);
+        case sizeof(AabbRecord): return copyRecords<sizeof(AabbRecord)>(records, temp, refs, begin, end);
         case sizeof(MotionTriangleRecord):
             return copyRecords<sizeof(MotionTriangleRecord)>(records, temp, refs, begin, end);
         case sizeof(InstanceRecord): return copyRecords<sizeof(InstanceRecord)>(records, temp, refs, begin, end);
@@ -121,6 +108,35 @@ void copyInTreeOrder(uint64_t recordSize, std::byte* records, const std::byte* t
     }
 }
 
+// Format 2 triangle leaves (layout.hpp, TriangleLeaf): leaf `ref` written from the gathered records its refs name.
+void writeTriangleLeaf(std::byte* records, const std::byte* temp, const PrimRef* refs, ChildRef ref) {
+    const uint64_t first = leafFirst(ref);
+    const uint32_t n = leafCount(ref);
+    const MutableTriangleLeaf leaf = triangleLeaf(records, first, n);
+    const auto* gathered = reinterpret_cast<const TriangleRecord*>(temp);
+    for (uint32_t lane = 0; lane < n; ++lane) {
+        TriangleRecord t;
+        std::memcpy(&t, &gathered[refs[first + lane].index], sizeof t);
+        for (uint32_t k = 0; k < 3; ++k)
+            for (uint32_t a = 0; a < 3; ++a) leaf.row(3 * k + a)[lane] = t.v[k][a];
+        leaf.primitiveIndex()[lane] = t.primitiveIndex;
+        leaf.geometryAndFlags()[lane] = packGeometryAndFlags(t.geometryIndex, t.flags);
+    }
+}
+
+// Every leaf of the tree, found through the node slots that name it (or the root), on several threads for large trees.
+void writeTriangleLeaves(const BuildJob& job, const Node* nodes, const BvhBuildResult& tree, std::byte* records,
+                         const std::byte* temp, const PrimRef* refs) {
+    if (isLeaf(tree.root)) writeTriangleLeaf(records, temp, refs, tree.root);
+    constexpr uint32_t kNodeChunk = 4096;
+    parallelForChunks(tree.nodeCount > 2 * kNodeChunk ? job.parallel : nullptr, tree.nodeCount, kNodeChunk,
+                      [&](uint32_t, uint64_t begin, uint64_t end) {
+                          for (uint64_t k = begin; k < end; ++k)
+                              for (const ChildRef ref : nodes[k].child)
+                                  if (isLeaf(ref)) writeTriangleLeaf(records, temp, refs, ref);
+                      });
+}
+
 }  // namespace
 
 VkResult buildAccelerationStructure(const BuildJob& job) {
@@ -129,11 +145,10 @@ VkResult buildAccelerationStructure(const BuildJob& job) {
                                                                                        : StructureType::BottomLevel;
     const uint64_t total = primitiveTotal(job);
     const bool motion = usesMotionRecords(info);  // [NV-motion] MotionInstanceRecords / MotionTriangleRecords
-    if (maxStructureSize(type, info.geometryCount, total, motion) > job.dstSize) return VK_ERROR_UNKNOWN;
+    const VkGeometryTypeKHR primitiveType = recordPrimitiveType(info);
+    if (maxStructureSize(type, primitiveType, info.geometryCount, total, motion) > job.dstSize) return VK_ERROR_UNKNOWN;
 
-    const VkGeometryTypeKHR primitiveType = primitiveTypeOf(info);
     const PrimitiveKind& kind = primitiveKind(type == StructureType::TopLevel, primitiveType, motion);
-    const uint64_t kRecordSize = recordSize(type, motion);
     // Scratch: PrimRef[total], then the gathered records in input order (build/size_query.hpp).
     PrimRef* refs = nullptr;
     std::byte* temp = nullptr;
@@ -143,17 +158,23 @@ VkResult buildAccelerationStructure(const BuildJob& job) {
     }
     const uint32_t n = total != 0 ? kind.gather(job, refs, temp) : 0;
 
-    const StructureLayout pre = structureLayout(type, info.geometryCount, 0, 0, motion);
+    const StructureLayout pre = structureLayout(type, primitiveType, info.geometryCount, 0, 0, motion);
     auto* nodes = reinterpret_cast<Node*>(job.dst + pre.nodeOffset);
     const BvhBuildResult tree = buildTree(refs, n, buildSettingsFor(maxLeafSize(type), info.flags), nodes, job.parallel);
-    const StructureLayout layout = structureLayout(type, info.geometryCount, tree.nodeCount, n, motion);
+    const StructureLayout layout = structureLayout(type, primitiveType, info.geometryCount, tree.nodeCount, n, motion);
     // The records in tree order: leaf ranges of refs name their temp slots.
     std::byte* records = job.dst + layout.recordOffset;
-    constexpr uint32_t kCopyChunk = 65536;
-    parallelForChunks(n > 2 * kCopyChunk ? job.parallel : nullptr, n, kCopyChunk,
-                      [&](uint32_t, uint64_t begin, uint64_t end) {
-                          copyInTreeOrder(kRecordSize, records, temp, refs, begin, end);
-                      });
+    if (storesTriangleLeaves(type, primitiveType, motion)) {
+        writeTriangleLeaves(job, nodes, tree, records, temp, refs);
+        std::memset(records + kTriangleBytes * n, 0, layout.end - layout.recordOffset - kTriangleBytes * n);  // tail
+    } else {
+        const uint64_t size = recordSize(type, primitiveType, motion);
+        constexpr uint32_t kCopyChunk = 65536;
+        parallelForChunks(n > 2 * kCopyChunk ? job.parallel : nullptr, n, kCopyChunk,
+                          [&](uint32_t, uint64_t begin, uint64_t end) {
+                              copyInTreeOrder(size, records, temp, refs, begin, end);
+                          });
+    }
     writeGeometryDescs(job.dst, job);
     clearGaps(job.dst, info.geometryCount, tree.nodeCount, layout);
     writeHeader(job.dst, type, primitiveType, info, total, tree, n, layout);

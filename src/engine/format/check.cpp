@@ -3,6 +3,7 @@
 #include <cstring>
 
 #include "engine/util/alongside.hpp"
+#include "engine/format/sizes.hpp"
 #include "engine/util/byte_io.hpp"
 #include <vector>
 
@@ -39,6 +40,7 @@ struct TreeWalk {
     std::vector<std::pair<uint32_t, uint32_t>> stack;  // node index, depth
     uint64_t nodesSeen = 0;
     uint64_t recordsCovered = 0;
+    std::vector<ChildRef>* leaves = nullptr;  // format-2 triangles: every leaf, for the lane checks
 
     const char* visit(ChildRef ref, uint32_t depth) {
         const uint64_t kind = ref >> kKindShift;
@@ -61,6 +63,7 @@ struct TreeWalk {
             if (count == 0) return "a leaf holds no record";
             if (first > recordCount || count > recordCount - first) return "a leaf names records outside the record array";
             recordsCovered += count;
+            if (leaves) leaves->push_back(ref);
             return nullptr;
         }
         return "a child reference has an unknown kind";
@@ -74,7 +77,9 @@ CheckResult checkBlock(const std::byte* block, uint64_t size) {
     Header h;
     std::memcpy(&h, block, sizeof h);
     if (h.magic != kMagic) return corrupt("the header's magic is not \"VKAS\"");
-    if (h.version != kVersion) return corrupt("the header's format version is not 1");
+    // Format 1 blocks are loaded too (format/convert.hpp rewrites them); their records are all arrays.
+    if (h.version != kVersion && h.version != kFormat1) return corrupt("the header's format version is not 1 or 2");
+    const bool format1 = h.version == kFormat1;
     if (h.usedSize < sizeof(Header) || h.usedSize > size) return corrupt("usedSize is out of range");
     const bool topLevel = h.type == uint32_t(StructureType::TopLevel);
     if (!topLevel && h.type != uint32_t(StructureType::BottomLevel)) return corrupt("the structure type is unknown");
@@ -93,8 +98,16 @@ CheckResult checkBlock(const std::byte* block, uint64_t size) {
     if (h.recordOffset > used || h.recordOffset % 64 != 0 ||
         uint64_t(h.nodeCount) * sizeof(Node) > h.recordOffset - h.nodeOffset)
         return corrupt("the node array does not fit before the records");
-    const uint64_t stride = recordSize(h.type, h.primitiveType, h.buildFlags);
-    if (uint64_t(h.recordCount) * stride > used - h.recordOffset) return corrupt("the records do not fit in usedSize");
+    const bool triangleLeaves =
+        !format1 && storesTriangleLeaves(structureTypeOf(h.type), h.primitiveType, isMotionFlag(h.buildFlags));
+    const uint64_t stride = format1 && !topLevel && !isMotionFlag(h.buildFlags)
+                                ? sizeof(TriangleRecord)  // every format-1 bottom-level record
+                                : recordSize(h.type, h.primitiveType, h.buildFlags);
+    const uint64_t tail = format1 ? 0 : recordTailSize(h.type, h.primitiveType, h.buildFlags, h.recordCount);
+    if (uint64_t(h.recordCount) * stride + tail > used - h.recordOffset)
+        return corrupt("the records do not fit in usedSize");
+    // Format 2 stores geometry indices in 24 bits (layout.hpp, TriangleLeaf); format 1 blocks must fit to load.
+    if (!topLevel && h.geometryCount > kGeometryIndexMask + 1) return corrupt("more geometries than 2^24");
     if (h.recordCount > h.primitiveCount) return corrupt("more records than primitives");
     // Geometry table.
     for (uint32_t g = 0; g < h.geometryCount; ++g) {
@@ -102,12 +115,14 @@ CheckResult checkBlock(const std::byte* block, uint64_t size) {
         if (topLevel ? type != VK_GEOMETRY_TYPE_INSTANCES_KHR : type != h.primitiveType)
             return corrupt("a geometry's type does not match the structure's primitive type");
     }
+    std::vector<ChildRef> leaves;
     // Tree: every node reached exactly once from the root, no deeper than the traversal stack allows, every leaf
     // inside the record array, the leaves covering recordCount records.
     if (h.root == kEmptyRef) {
         if (h.nodeCount != 0 || h.recordCount != 0) return corrupt("an empty root with nodes or records");
     } else {
         TreeWalk walk{h.nodeCount, h.recordCount, std::vector<uint8_t>(h.nodeCount, 0), {}};
+        walk.leaves = triangleLeaves ? &leaves : nullptr;
         if (const char* why = walk.visit(h.root, 0)) return corrupt(why);
         while (!walk.stack.empty()) {
             const auto [index, depth] = walk.stack.back();
@@ -123,6 +138,24 @@ CheckResult checkBlock(const std::byte* block, uint64_t size) {
     }
     // Records: indices in range.
     const std::byte* records = block + h.recordOffset;
+    auto primitivesOf = [&](uint32_t geometry) {
+        return load32(block + h.geometryOffset + uint64_t(geometry) * sizeof(GeometryDesc) +
+                      offsetof(GeometryDesc, primitiveCount));
+    };
+    if (triangleLeaves) {  // format 2 triangles: lane by lane through the leaves (which lie inside the array)
+        for (const ChildRef ref : leaves) {
+            const uint64_t at = leafFirst(ref) * kTriangleBytes;
+            const uint32_t n = leafCount(ref);
+            for (uint32_t l = 0; l < n; ++l) {
+                const uint32_t geometry =
+                    load32(records + at + 4 * (uint64_t(kTriangleRows + 1) * n + l)) & kGeometryIndexMask;
+                if (geometry >= h.geometryCount) return corrupt("a record's geometryIndex is out of range");
+                if (load32(records + at + 4 * (uint64_t(kTriangleRows) * n + l)) >= primitivesOf(geometry))
+                    return corrupt("a record's primitiveIndex is out of range");
+            }
+        }
+        return {};
+    }
     if (topLevel) {
         const bool motion = stride == sizeof(MotionInstanceRecord);
         for (uint64_t r = 0; r < h.recordCount; ++r) {
@@ -138,10 +171,7 @@ CheckResult checkBlock(const std::byte* block, uint64_t size) {
             const std::byte* rec = records + r * stride;
             const uint32_t geometry = load32(rec + at);
             if (geometry >= h.geometryCount) return corrupt("a record's geometryIndex is out of range");
-            const uint32_t primitives =
-                load32(block + h.geometryOffset + uint64_t(geometry) * sizeof(GeometryDesc) +
-                       offsetof(GeometryDesc, primitiveCount));
-            if (load32(rec + at + 4) >= primitives) return corrupt("a record's primitiveIndex is out of range");
+            if (load32(rec + at + 4) >= primitivesOf(geometry)) return corrupt("a record's primitiveIndex is out of range");
         }
     }
     return {};
@@ -152,6 +182,7 @@ CheckResult checkSerializedLayout(const std::byte* data, uint64_t size, serial::
     if (!data || size < kHeaderSize) return corrupt("the blob is shorter than the serialized header");
     SerializedView v;
     v.layout = layoutOf(reinterpret_cast<const uint8_t*>(data));
+    v.blockVersion = blockVersionOf(reinterpret_cast<const uint8_t*>(data));
     if (v.layout == Layout::None)
         return {CheckStatus::Incompatible, "the driver or compatibility UUID is not one vkas loads"};
     v.data = data;
@@ -185,6 +216,7 @@ CheckResult checkLoadedBlock(const serial::SerializedView& view, const std::byte
     Header h;
     std::memcpy(&h, block, sizeof h);
     if (h.usedSize != view.deserializedSize) return corrupt("the deserialized size is not the block's usedSize");
+    if (h.version != view.blockVersion) return corrupt("the block's format version is not the compatibility UUID's");
     const bool topLevel = h.type == uint32_t(StructureType::TopLevel);
     const bool blockForm = (load64(view.data + serial::kHandleCountOffset) >> 32) == 0xFFFF'FFFFull;
     if (topLevel ? (blockForm || view.handleCount != h.primitiveCount) : view.handleCount != 0)

@@ -1,18 +1,22 @@
 // The in-memory format of a vkas acceleration structure (docs/FORMAT.md describes it byte by byte).
 //
 // A structure is one contiguous block at the start of [offset, offset + size) of its buffer:
-//   Header | GeometryDesc[geometryCount] | Node[nodeCount] | TriangleRecord[], AabbRecord[] or InstanceRecord[]
+//   Header | GeometryDesc[geometryCount] | Node[nodeCount] | triangle leaves, AabbRecord[] or InstanceRecord[]
 // Every offset inside is relative to the start of the block, so a byte copy of the first usedSize bytes is a
 // valid clone. Nodes are 8 wide with their child boxes stored as structure-of-arrays for SIMD box tests.
 #pragma once
 
 #include <cstddef>
 #include <cstdint>
+#include <type_traits>
 
 namespace vkas::format {
 
 constexpr uint32_t kMagic = 0x5341'4B56u;  // "VKAS" read as little-endian bytes
-constexpr uint32_t kVersion = 1;
+// Format 2 stores the triangles of a (non-motion) bottom level as structure-of-arrays leaves (TriangleLeaf below);
+// format 1 stored 48-byte TriangleRecords. Blocks of format 1 still load: format/convert.hpp rewrites them.
+constexpr uint32_t kVersion = 2;
+constexpr uint32_t kFormat1 = 1;
 constexpr uint32_t kNodeWidth = 8;
 constexpr uint32_t kMaxPrimitivesPerLeaf = 4;  // triangles or AABBs
 constexpr uint32_t kMaxInstancesPerLeaf = 1;
@@ -96,6 +100,8 @@ constexpr uint32_t kTriangleNoDuplicateAnyHit = 0x4;
 constexpr uint32_t kAabbOpaque = kTriangleOpaque;
 constexpr uint32_t kAabbNoDuplicateAnyHit = kTriangleNoDuplicateAnyHit;
 
+// One triangle as the build gathers it (and as format 1 stored it): the build's temporary record, the base of a
+// motion triangle record, and what a triangle leaf is written from.
 struct TriangleRecord {
     float v[3][3];  // object-space positions after the geometry transform, application vertex order
     uint32_t geometryIndex;
@@ -103,6 +109,47 @@ struct TriangleRecord {
     uint32_t flags;
 };
 static_assert(sizeof(TriangleRecord) == 48);
+
+// Format 2: the triangles of a non-motion bottom level. A leaf of n triangles that starts at triangle number `first`
+// (its reference's leafFirst) occupies 44 * n bytes at recordOffset + 44 * first, as structure-of-arrays:
+//   f32 v0x[n], v0y[n], v0z[n], v1x[n], v1y[n], v1z[n], v2x[n], v2y[n], v2z[n]   (row r = 3 * vertex + axis)
+//   u32 primitiveIndex[n]
+//   u32 geometryAndFlags[n]: bits 0-23 geometryIndex, bits 24-31 the record flags (kTriangle*)
+// so a 4-lane test loads each row with one unaligned load (lanes past n are masked off). The last row of a leaf of
+// one triangle reads 4 bytes past the leaf: the triangle array ends with kTriangleTailBytes zero bytes.
+constexpr uint64_t kTriangleBytes = 44;
+constexpr uint64_t kTriangleTailBytes = 4;
+constexpr uint32_t kTriangleRows = 9;
+constexpr uint32_t kGeometryIndexBits = 24;
+constexpr uint32_t kGeometryIndexMask = (1u << kGeometryIndexBits) - 1;
+constexpr uint32_t packGeometryAndFlags(uint32_t geometryIndex, uint32_t flags) {
+    return (geometryIndex & kGeometryIndexMask) | (flags << kGeometryIndexBits);
+}
+
+// A view of one triangle leaf: where its rows and per-lane words are (the bytes may be unaligned for floats only to
+// 4 bytes, which every access here allows).
+template <class Byte>
+struct TriangleLeafView {
+    Byte* base;  // recordOffset + kTriangleBytes * first
+    uint32_t n;
+    auto* row(uint32_t r) const { return reinterpret_cast<std::conditional_t<std::is_const_v<Byte>, const float, float>*>(base) + r * n; }
+    auto* primitiveIndex() const { return reinterpret_cast<std::conditional_t<std::is_const_v<Byte>, const uint32_t, uint32_t>*>(base) + kTriangleRows * n; }
+    auto* geometryAndFlags() const { return primitiveIndex() + n; }
+    uint32_t geometryIndex(uint32_t lane) const { return geometryAndFlags()[lane] & kGeometryIndexMask; }
+    uint32_t flags(uint32_t lane) const { return geometryAndFlags()[lane] >> kGeometryIndexBits; }
+    void positions(uint32_t lane, float v[3][3]) const {
+        for (uint32_t k = 0; k < 3; ++k)
+            for (uint32_t a = 0; a < 3; ++a) v[k][a] = row(3 * k + a)[lane];
+    }
+};
+using ConstTriangleLeaf = TriangleLeafView<const std::byte>;
+using MutableTriangleLeaf = TriangleLeafView<std::byte>;
+inline ConstTriangleLeaf triangleLeaf(const std::byte* records, uint64_t first, uint32_t n) {
+    return {records + kTriangleBytes * first, n};
+}
+inline MutableTriangleLeaf triangleLeaf(std::byte* records, uint64_t first, uint32_t n) {
+    return {records + kTriangleBytes * first, n};
+}
 
 // One active VkAabbPositionsKHR, as given (already floats: the tree bounds it exactly).
 struct AabbRecord {
@@ -193,9 +240,7 @@ inline const GeometryDesc* geometries(const std::byte* base) {
 inline const Node* nodes(const std::byte* base) {
     return reinterpret_cast<const Node*>(base + header(base)->nodeOffset);
 }
-inline const TriangleRecord* triangles(const std::byte* base) {
-    return reinterpret_cast<const TriangleRecord*>(base + header(base)->recordOffset);
-}
+inline const std::byte* records(const std::byte* base) { return base + header(base)->recordOffset; }
 inline const AabbRecord* aabbs(const std::byte* base) {
     return reinterpret_cast<const AabbRecord*>(base + header(base)->recordOffset);
 }

@@ -24,8 +24,14 @@ static_assert(kInstanceIdOffset / 64 == kInstanceReferenceOffset / 64 && kInstan
 
 }  // namespace
 
+uint32_t blockVersionOf(const uint8_t* versionData) {
+    if (std::memcmp(versionData + kCompatibilityUuidOffset, kCompatibilityUuidV2, kUuidSize) == 0) return format::kVersion;
+    if (std::memcmp(versionData + kCompatibilityUuidOffset, kCompatibilityUuidV1, kUuidSize) == 0) return format::kFormat1;
+    return 0;
+}
+
 Layout layoutOf(const uint8_t* versionData) {
-    if (std::memcmp(versionData + kCompatibilityUuidOffset, kCompatibilityUuidV1, kUuidSize) != 0) return Layout::None;
+    if (blockVersionOf(versionData) == 0) return Layout::None;
     if (std::memcmp(versionData + kDriverUuidOffset, kDriverUuidV2, kUuidSize) == 0) return Layout::V2;
     if (std::memcmp(versionData + kDriverUuidOffset, kDriverUuidV1, kUuidSize) == 0) return Layout::V1;
     return Layout::None;
@@ -88,7 +94,7 @@ void serializeBlock(const std::byte* block, std::byte* out, ReferenceMapper toAd
     const bool topLevel = h.type == uint32_t(format::StructureType::TopLevel);
     std::byte head[kHeaderSize];
     std::memcpy(head + kDriverUuidOffset, kDriverUuidV2, kUuidSize);
-    std::memcpy(head + kCompatibilityUuidOffset, kCompatibilityUuidV1, kUuidSize);
+    std::memcpy(head + kCompatibilityUuidOffset, kCompatibilityUuidV2, kUuidSize);
     store64(head + kSerializedSizeOffset, serializedSize(block));
     store64(head + kDeserializedSizeOffset, h.usedSize);
     store64(head + kHandleCountOffset, n);

@@ -41,9 +41,13 @@ inline constexpr uint8_t kDriverUuidV1[kUuidSize] = {'V', 'K', 'A', 'S', '-', 'D
                                                      'V', 'E', 'R', '-', 'F', 'M', 'T', '1'};
 inline constexpr uint8_t kDriverUuidV2[kUuidSize] = {'V', 'K', 'A', 'S', '-', 'S', 'E', 'R',
                                                      'I', 'A', 'L', 'I', 'Z', 'E', 'D', '2'};
-// Block format version 1 (format::kVersion), in both layouts.
+// The block's format version, in both layouts: 1 (loaded and converted, format/convert.hpp) or 2 (written).
 inline constexpr uint8_t kCompatibilityUuidV1[kUuidSize] = {'V', 'K', 'A', 'S', '-', 'A', 'S', '-',
                                                             'F', 'O', 'R', 'M', 'A', 'T', '-', '1'};
+inline constexpr uint8_t kCompatibilityUuidV2[kUuidSize] = {'V', 'K', 'A', 'S', '-', 'A', 'S', '-',
+                                                            'F', 'O', 'R', 'M', 'A', 'T', '-', '2'};
+// The block format version the compatibility UUID of a serialized header names (0: none this build loads).
+uint32_t blockVersionOf(const uint8_t* versionData);
 
 // The layout the first 2 * VK_UUID_SIZE bytes of a serialized header (driverUUID, compatibility UUID) name, or
 // Layout::None for a pair this build does not load.
@@ -91,6 +95,7 @@ struct SerializedView {
     const std::byte* data = nullptr;     // the blob: its first kHeaderSize bytes are hashed (layout 2)
     const std::byte* handles = nullptr;  // handleCount u64 (unaligned)
     uint64_t storedHash = 0;             // layout 2: the integrity hash the blob carries
+    uint32_t blockVersion = 0;           // the block's format version, named by the compatibility UUID
     const std::byte* block = nullptr;    // deserializedSize bytes (unaligned)
 };
 

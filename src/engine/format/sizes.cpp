@@ -10,13 +10,14 @@ uint32_t maxLeafSize(format::StructureType type) {
     return type == format::StructureType::TopLevel ? format::kMaxInstancesPerLeaf : format::kMaxPrimitivesPerLeaf;
 }
 
-StructureLayout structureLayout(format::StructureType type, uint32_t geometryCount, uint64_t nodeCount,
-                                uint64_t recordCount, bool motion) {
+StructureLayout structureLayout(format::StructureType type, uint32_t primitiveType, uint32_t geometryCount,
+                                uint64_t nodeCount, uint64_t recordCount, bool motion) {
     StructureLayout l;
     l.geometryOffset = sizeof(format::Header);
     l.nodeOffset = alignUp(l.geometryOffset + uint64_t(geometryCount) * sizeof(format::GeometryDesc), 64);
     l.recordOffset = alignUp(l.nodeOffset + nodeCount * sizeof(format::Node), 64);
-    l.end = l.recordOffset + recordCount * recordSize(type, motion);
+    l.end = l.recordOffset + recordCount * recordSize(type, primitiveType, motion) +
+            recordTailSize(type, primitiveType, motion, recordCount);
     return l;
 }
 
@@ -28,9 +29,10 @@ uint64_t maxWideNodeCount(uint64_t n, uint32_t maxLeafSize) {
     return partial + (n - 1) / 7 + 1;
 }
 
-uint64_t maxStructureSize(format::StructureType type, uint32_t geometryCount, uint64_t primitiveCount, bool motion) {
+uint64_t maxStructureSize(format::StructureType type, uint32_t primitiveType, uint32_t geometryCount,
+                          uint64_t primitiveCount, bool motion) {
     const uint64_t nodes = maxWideNodeCount(primitiveCount, maxLeafSize(type));
-    return structureLayout(type, geometryCount, nodes, primitiveCount, motion).end;
+    return structureLayout(type, primitiveType, geometryCount, nodes, primitiveCount, motion).end;
 }
 
 }  // namespace vkas

@@ -18,31 +18,45 @@ struct StructureLayout {
 
 // Bytes per record. motion: the structure stores [NV-motion] records (format::MotionInstanceRecord for a top
 // level, format::MotionTriangleRecord for a bottom level of triangles); see usesMotionRecords
-// (input/build_inputs.hpp). Triangle, AABB, sphere and LSS records have one size (layout.hpp asserts it).
-constexpr uint64_t recordSize(format::StructureType type, bool motion = false) {
+// (input/build_inputs.hpp). Format 2 stores a non-motion triangle in kTriangleBytes of its leaf (layout.hpp,
+// TriangleLeaf); AABB, sphere and LSS records have the size of a TriangleRecord (layout.hpp asserts it).
+constexpr bool storesTriangleLeaves(format::StructureType type, uint32_t primitiveType, bool motion) {
+    return type == format::StructureType::BottomLevel && !motion && primitiveType == 0 /* TRIANGLES */;
+}
+constexpr uint64_t recordSize(format::StructureType type, uint32_t primitiveType, bool motion) {
     if (type == format::StructureType::TopLevel)
         return motion ? sizeof(format::MotionInstanceRecord) : sizeof(format::InstanceRecord);
-    return motion ? sizeof(format::MotionTriangleRecord) : sizeof(format::TriangleRecord);
+    if (motion && primitiveType == 0) return sizeof(format::MotionTriangleRecord);
+    return storesTriangleLeaves(type, primitiveType, motion) ? format::kTriangleBytes : sizeof(format::TriangleRecord);
 }
-// The same, from the header fields of a block: a motion build (VK_BUILD_ACCELERATION_STRUCTURE_MOTION_BIT_NV,
+// The same, from the header fields of a block of format 2: a motion build (VK_BUILD_ACCELERATION_STRUCTURE_MOTION_BIT_NV,
 // 0x20) stores motion records at the top level and for triangles (primitive type 0) only.
+constexpr bool isMotionFlag(uint32_t buildFlags) { return (buildFlags & 0x20u) != 0; }
+constexpr format::StructureType structureTypeOf(uint32_t type) {
+    return type == uint32_t(format::StructureType::TopLevel) ? format::StructureType::TopLevel
+                                                             : format::StructureType::BottomLevel;
+}
 constexpr uint64_t recordSize(uint32_t type, uint32_t primitiveType, uint32_t buildFlags) {
-    const bool motion = (buildFlags & 0x20u) != 0;
-    const bool topLevel = type == uint32_t(format::StructureType::TopLevel);
-    return recordSize(topLevel ? format::StructureType::TopLevel : format::StructureType::BottomLevel,
-                      motion && (topLevel || primitiveType == 0 /* VK_GEOMETRY_TYPE_TRIANGLES_KHR */));
+    return recordSize(structureTypeOf(type), primitiveType, isMotionFlag(buildFlags));
+}
+// Bytes after the last record: the zero tail of a triangle array (layout.hpp, kTriangleTailBytes), else none.
+constexpr uint64_t recordTailSize(format::StructureType type, uint32_t primitiveType, bool motion, uint64_t recordCount) {
+    return recordCount != 0 && storesTriangleLeaves(type, primitiveType, motion) ? format::kTriangleTailBytes : 0;
+}
+constexpr uint64_t recordTailSize(uint32_t type, uint32_t primitiveType, uint32_t buildFlags, uint64_t recordCount) {
+    return recordTailSize(structureTypeOf(type), primitiveType, isMotionFlag(buildFlags), recordCount);
 }
 
 uint32_t maxLeafSize(format::StructureType type);
-StructureLayout structureLayout(format::StructureType type, uint32_t geometryCount, uint64_t nodeCount,
-                                uint64_t recordCount, bool motion = false);
+StructureLayout structureLayout(format::StructureType type, uint32_t primitiveType, uint32_t geometryCount,
+                                uint64_t nodeCount, uint64_t recordCount, bool motion = false);
 
 // Upper bound on the nodes a build of n primitives writes (every builder keeps to it; docs/FORMAT.md derives it).
 uint64_t maxWideNodeCount(uint64_t n, uint32_t maxLeafSize);
 
 // The used size of the largest structure any build of `primitiveCount` primitives (or instances) in
 // `geometryCount` geometries can make.
-uint64_t maxStructureSize(format::StructureType type, uint32_t geometryCount, uint64_t primitiveCount,
-                          bool motion = false);
+uint64_t maxStructureSize(format::StructureType type, uint32_t primitiveType, uint32_t geometryCount,
+                          uint64_t primitiveCount, bool motion = false);
 
 }  // namespace vkas

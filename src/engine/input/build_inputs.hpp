@@ -16,4 +16,9 @@ const VkAccelerationStructureGeometryKHR& buildGeometry(const VkAccelerationStru
 // intersection code knows how a box moves).
 bool usesMotionRecords(const VkAccelerationStructureBuildGeometryInfoKHR& info);
 
+// The VkGeometryTypeKHR of the records a build stores. All geometries of a bottom-level structure have one type (VUID
+// 03792): geometry 0 names it; anything but AABBs, spheres and LSS is read as triangles (so is a build without
+// geometries). A top level stores instances.
+VkGeometryTypeKHR recordPrimitiveType(const VkAccelerationStructureBuildGeometryInfoKHR& info);
+
 }  // namespace vkas

@@ -12,6 +12,7 @@
 #include "engine/trace/node_test_sse.hpp"
 #include "engine/trace/ray.hpp"
 #include "engine/trace/traversal_steps.hpp"
+#include "engine/trace/triangle_leaf_test.hpp"
 #include "engine/trace/triangle_test.hpp"
 
 #if defined(__x86_64__)

@@ -5,42 +5,6 @@
 // function of a header included before (compiled for the baseline target, which an AVX2 function may inline).
 // Every function here has internal linkage, so the two copies never meet at link time.
 
-// Four triangles of a leaf screened at once: the lanes the exact test (intersectTriangle) may accept. The edge
-// functions are computed with the same float operations as intersectTriangle; a lane is dropped only when all
-// three are non-zero and of mixed signs, which intersectTriangle rejects without further ado. Lanes at or past
-// `count` are copies of record 0 and are masked off.
-static inline uint32_t screenFour(const format::TriangleRecord* rec, uint32_t count, const ShearedRay& r) {
-    const float* f0 = &rec[0].v[0][0];
-    const float* f1 = &rec[count > 1 ? 1 : 0].v[0][0];
-    const float* f2 = &rec[count > 2 ? 2 : 0].v[0][0];
-    const float* f3 = &rec[count > 3 ? 3 : 0].v[0][0];
-    __m128 a0 = _mm_loadu_ps(f0), a1 = _mm_loadu_ps(f1), a2 = _mm_loadu_ps(f2), a3 = _mm_loadu_ps(f3);
-    __m128 b0 = _mm_loadu_ps(f0 + 4), b1 = _mm_loadu_ps(f1 + 4), b2 = _mm_loadu_ps(f2 + 4),
-           b3 = _mm_loadu_ps(f3 + 4);
-    _MM_TRANSPOSE4_PS(a0, a1, a2, a3);  // v0.x, v0.y, v0.z, v1.x
-    _MM_TRANSPOSE4_PS(b0, b1, b2, b3);  // v1.y, v1.z, v2.x, v2.y
-    const __m128 v2z = _mm_setr_ps(f0[8], f1[8], f2[8], f3[8]);
-    const __m128 p0[3] = {a0, a1, a2}, p1[3] = {a3, b0, b1}, p2[3] = {b2, b3, v2z};
-    const __m128 ox = _mm_set1_ps(r.org[r.kx]), oy = _mm_set1_ps(r.org[r.ky]), oz = _mm_set1_ps(r.org[r.kz]);
-    const __m128 sx = _mm_set1_ps(r.sx), sy = _mm_set1_ps(r.sy);
-    const __m128 Az0 = _mm_sub_ps(p0[r.kz], oz), Bz0 = _mm_sub_ps(p1[r.kz], oz), Cz0 = _mm_sub_ps(p2[r.kz], oz);
-    const __m128 Ax = _mm_sub_ps(_mm_sub_ps(p0[r.kx], ox), _mm_mul_ps(sx, Az0));
-    const __m128 Ay = _mm_sub_ps(_mm_sub_ps(p0[r.ky], oy), _mm_mul_ps(sy, Az0));
-    const __m128 Bx = _mm_sub_ps(_mm_sub_ps(p1[r.kx], ox), _mm_mul_ps(sx, Bz0));
-    const __m128 By = _mm_sub_ps(_mm_sub_ps(p1[r.ky], oy), _mm_mul_ps(sy, Bz0));
-    const __m128 Cx = _mm_sub_ps(_mm_sub_ps(p2[r.kx], ox), _mm_mul_ps(sx, Cz0));
-    const __m128 Cy = _mm_sub_ps(_mm_sub_ps(p2[r.ky], oy), _mm_mul_ps(sy, Cz0));
-    const __m128 U = _mm_sub_ps(_mm_mul_ps(Cx, By), _mm_mul_ps(Cy, Bx));
-    const __m128 V = _mm_sub_ps(_mm_mul_ps(Ax, Cy), _mm_mul_ps(Ay, Cx));
-    const __m128 W = _mm_sub_ps(_mm_mul_ps(Bx, Ay), _mm_mul_ps(By, Ax));
-    const __m128 z = _mm_setzero_ps();
-    const __m128 neg = _mm_or_ps(_mm_or_ps(_mm_cmplt_ps(U, z), _mm_cmplt_ps(V, z)), _mm_cmplt_ps(W, z));
-    const __m128 pos = _mm_or_ps(_mm_or_ps(_mm_cmpgt_ps(U, z), _mm_cmpgt_ps(V, z)), _mm_cmpgt_ps(W, z));
-    const __m128 zero = _mm_or_ps(_mm_or_ps(_mm_cmpeq_ps(U, z), _mm_cmpeq_ps(V, z)), _mm_cmpeq_ps(W, z));
-    const uint32_t rejected = uint32_t(_mm_movemask_ps(_mm_andnot_ps(zero, _mm_and_ps(neg, pos))));
-    return ~rejected & ((1u << (count < 4 ? count : 4)) - 1u);
-}
-
 struct Walk {
     ShearedRay worldRay, objectRay;
     float tMin, tMax;
@@ -50,27 +14,33 @@ struct Walk {
     bool done;
 };
 
-// The triangle decision of the ray query (hit_rules.hpp) for a candidate that needs no application decision: a
-// non-opaque one is confirmed on the spot, as queryRunToCompletion does.
-static inline void testTriangleExact(Walk& w, const format::TriangleRecord& tri) {
-    TriangleCandidate c;
-    if (!triangleCandidate(w.objectRay, w.tMin, w.tMax, w.flags, w.instance->sbtOffsetAndFlags >> 24, tri, tri.v, c))
-        return;
-    setTriangleHit(*w.committed, kCommittedTriangle, c, tri, w.instance, w.objectRay);
-    w.tMax = c.hit.t;
-    if (w.flags & kRayTerminateOnFirstHit) w.done = true;
-}
-
-static inline void testTriangleLeaf(Walk& w, const format::TriangleRecord* records, format::ChildRef leaf) {
-    const format::TriangleRecord* rec = records + format::leafFirst(leaf);
-    for (uint32_t left = format::leafCount(leaf); left > 0;) {
-        const uint32_t n = left < 4 ? left : 4;
-        for (uint32_t lanes = screenFour(rec, n, w.objectRay); lanes != 0; lanes &= lanes - 1) {
-            testTriangleExact(w, rec[__builtin_ctz(lanes)]);
-            if (w.done) return;
+// The triangle decision of the ray query (hit_rules.hpp) for each lane of a leaf that the four-lane test
+// (triangle_leaf_test.hpp) leaves: a non-opaque candidate needs no application decision here and is confirmed on the
+// spot, as queryRunToCompletion does. Lanes are taken in order, so hits and ties are the ray query's.
+static inline void testTriangleLeaf(Walk& w, const std::byte* records, format::ChildRef leafRef) {
+    const format::ConstTriangleLeaf leaf = format::triangleLeaf(records, format::leafFirst(leafRef), format::leafCount(leafRef));
+    const uint32_t instanceFlags = w.instance->sbtOffsetAndFlags >> 24;
+    for (uint32_t lane0 = 0; lane0 < leaf.n; lane0 += 4) {
+        FourLaneEdges e;
+        edgesOfFour(leaf, lane0, leaf.n - lane0 < 4 ? leaf.n - lane0 : 4, w.objectRay, e);
+        for (uint32_t lanes = e.covered | e.undecided; lanes != 0; lanes &= lanes - 1) {
+            const uint32_t lane = uint32_t(__builtin_ctz(lanes));
+            const uint32_t flags = leaf.flags(lane0 + lane);
+            if (flags & format::kTriangleDegenerate) continue;
+            TriangleCandidate c;
+            if (!laneIntersection(leaf, lane0, lane, e, w.objectRay, c.hit) ||
+                !acceptTriangleHit(w.tMin, w.tMax, w.flags, instanceFlags, flags, c))
+                continue;
+            float v[3][3];
+            leaf.positions(lane0 + lane, v);
+            setTriangleHit(*w.committed, kCommittedTriangle, c, leaf.geometryIndex(lane0 + lane),
+                           leaf.primitiveIndex()[lane0 + lane], v, w.instance, w.objectRay);
+            w.tMax = c.hit.t;
+            if (w.flags & kRayTerminateOnFirstHit) {
+                w.done = true;
+                return;
+            }
         }
-        rec += n;
-        left -= n;
     }
 }
 
@@ -117,13 +87,8 @@ static inline void walkTree(Walk& w, const format::Node* nodes, const ShearedRay
 // The leaves of a bottom level: its triangles.
 struct TriangleLeaves {
     Walk& w;
-    const format::TriangleRecord* records;
+    const std::byte* records;
     void operator()(format::ChildRef leaf, uint32_t) const { testTriangleLeaf(w, records, leaf); }
-    void prefetch(format::ChildRef leaf) const {
-        const char* p = reinterpret_cast<const char*>(records + format::leafFirst(leaf));
-        const char* end = p + sizeof(format::TriangleRecord) * format::leafCount(leaf);
-        for (; p < end; p += 64) _mm_prefetch(p, _MM_HINT_T0);
-    }
 };
 
 // The leaves of the top level: instances, each entered as ray_query.cpp's enterInstance does.
@@ -140,10 +105,6 @@ struct InstanceLeaves {
         s.cachedReference = reference;
         s.cachedBlas = blas;
         return blas;
-    }
-
-    void prefetch(format::ChildRef leaf) const {
-        _mm_prefetch(reinterpret_cast<const char*>(instances + format::leafFirst(leaf)), _MM_HINT_T0);
     }
 
     void operator()(format::ChildRef leaf, uint32_t sp) const {
@@ -164,7 +125,7 @@ struct InstanceLeaves {
             transformRay(inst.worldToObject, w.worldRay.org, w.worldRay.dir, oo, od);
             prepareShearedRay(w.objectRay, oo, od);
             w.instance = &inst;
-            walkTree(w, format::nodes(blas), w.objectRay, h->root, s, sp, TriangleLeaves{w, format::triangles(blas)});
+            walkTree(w, format::nodes(blas), w.objectRay, h->root, s, sp, TriangleLeaves{w, format::records(blas)});
             if (w.done) return;
         }
     }

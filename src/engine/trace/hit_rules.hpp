@@ -51,7 +51,11 @@ struct QueryHit {
     bool frontFace;
     bool aabbOpaque;
     const format::InstanceRecord* instance;  // null for no hit
-    const format::TriangleRecord* triangle;  // triangle candidates and hits
+    // Triangle candidates and hits: their indices and positions (format 2 leaves are structure-of-arrays, so the hit
+    // keeps its own copy; [NV-motion] the positions at the ray time), which position fetch returns.
+    bool isTriangle;
+    uint32_t triangleGeometryIndex, trianglePrimitiveIndex;
+    float trianglePositions[3][3];
     const format::AabbRecord* aabb;          // AABB candidates and generated hits
     // [NV-LSS] Sphere and LSS candidates and hits. They report the triangle intersection types (as SPIR-V does)
     // and are told apart by these pointers (OpRayQueryIsSphereHitNV / OpRayQueryIsLSSHitNV).
@@ -64,14 +68,14 @@ struct QueryHit {
 
 // Geometry and primitive index of a hit, -1 without one.
 inline int32_t hitGeometryIndex(const QueryHit& h) {
-    return h.triangle ? int32_t(h.triangle->geometryIndex)
+    return h.isTriangle ? int32_t(h.triangleGeometryIndex)
            : h.aabb   ? int32_t(h.aabb->geometryIndex)
            : h.sphere ? int32_t(h.sphere->geometryIndex)
            : h.lss    ? int32_t(h.lss->geometryIndex)
                       : -1;
 }
 inline int32_t hitPrimitiveIndex(const QueryHit& h) {
-    return h.triangle ? int32_t(h.triangle->primitiveIndex)
+    return h.isTriangle ? int32_t(h.trianglePrimitiveIndex)
            : h.aabb   ? int32_t(h.aabb->primitiveIndex)
            : h.sphere ? int32_t(h.sphere->primitiveIndex)
            : h.lss    ? int32_t(h.lss->primitiveIndex)
@@ -86,13 +90,10 @@ struct TriangleCandidate {
     bool opaque;
 };
 
-// Whether the ray, in [tMin, tMax] (exclusive for triangles), meets triangle `tri` at positions `v` (the record's
-// own, or [NV-motion] the ones interpolated at the ray time) as a candidate: not degenerate, covered (watertight
-// test), not culled by facing (unless the instance disables culling) nor by opacity.
-inline bool triangleCandidate(const ShearedRay& r, float tMin, float tMax, uint32_t rayFlags, uint32_t instanceFlags,
-                              const format::TriangleRecord& tri, const float (*v)[3], TriangleCandidate& out) {
-    if (tri.flags & format::kTriangleDegenerate) return false;
-    if (!intersectTriangle(r, v[0], v[1], v[2], out.hit)) return false;
+// What follows the intersection: the t interval (exclusive for triangles), the facing culls (unless the instance
+// disables culling) and opacity, for a triangle with record flags `recordFlags` that the ray covers at `out.hit`.
+inline bool acceptTriangleHit(float tMin, float tMax, uint32_t rayFlags, uint32_t instanceFlags, uint32_t recordFlags,
+                              TriangleCandidate& out) {
     if (!(out.hit.t > tMin && out.hit.t < tMax)) return false;  // strict for triangles
     bool front = out.hit.frontFace;
     if (instanceFlags & kInstanceFlipFacing) front = !front;
@@ -101,8 +102,19 @@ inline bool triangleCandidate(const ShearedRay& r, float tMin, float tMax, uint3
         if ((rayFlags & kRayCullFront) && front) return false;
     }
     out.frontFace = front;
-    out.opaque = resolveOpacity((tri.flags & format::kTriangleOpaque) != 0, instanceFlags, rayFlags);
+    out.opaque = resolveOpacity((recordFlags & format::kTriangleOpaque) != 0, instanceFlags, rayFlags);
     return !culledByOpacity(out.opaque, rayFlags);
+}
+
+// Whether the ray, in [tMin, tMax] (exclusive for triangles), meets the triangle with record flags `recordFlags` at
+// positions `v` (its own, or [NV-motion] the ones interpolated at the ray time) as a candidate: not degenerate,
+// covered (watertight test), not culled by facing nor by opacity. The batch kernel's four-lane leaf test
+// (triangle_leaf_test.hpp) makes the same decision with the intersection's edge functions computed four at a time.
+inline bool triangleCandidate(const ShearedRay& r, float tMin, float tMax, uint32_t rayFlags, uint32_t instanceFlags,
+                              uint32_t recordFlags, const float (*v)[3], TriangleCandidate& out) {
+    if (recordFlags & format::kTriangleDegenerate) return false;
+    if (!intersectTriangle(r, v[0], v[1], v[2], out.hit)) return false;
+    return acceptTriangleHit(tMin, tMax, rayFlags, instanceFlags, recordFlags, out);
 }
 
 // Starts hit record `h` of `type` at t on `instance`, seen along the object-space ray `r`: no primitive yet, no
@@ -114,7 +126,7 @@ inline void startHit(QueryHit& h, uint32_t type, float t, const format::Instance
     h.frontFace = false;
     h.aabbOpaque = false;
     h.instance = instance;
-    h.triangle = nullptr;
+    h.isTriangle = false;
     h.aabb = nullptr;
     h.sphere = nullptr;
     h.lss = nullptr;
@@ -122,14 +134,20 @@ inline void startHit(QueryHit& h, uint32_t type, float t, const format::Instance
     for (int i = 0; i < 3; ++i) h.objectOrigin[i] = r.org[i], h.objectDirection[i] = r.dir[i];
 }
 
-// Hit record `h` of `type` for the triangle candidate `c` of `tri`.
-inline void setTriangleHit(QueryHit& h, uint32_t type, const TriangleCandidate& c, const format::TriangleRecord& tri,
-                           const format::InstanceRecord* instance, const ShearedRay& r) {
+// Hit record `h` of `type` for the triangle candidate `c`: primitive `primitiveIndex` of geometry `geometryIndex`,
+// at positions `v`.
+inline void setTriangleHit(QueryHit& h, uint32_t type, const TriangleCandidate& c, uint32_t geometryIndex,
+                           uint32_t primitiveIndex, const float (*v)[3], const format::InstanceRecord* instance,
+                           const ShearedRay& r) {
     startHit(h, type, c.hit.t, instance, r);
     h.barycentrics[0] = c.hit.b;
     h.barycentrics[1] = c.hit.c;
     h.frontFace = c.frontFace;
-    h.triangle = &tri;
+    h.isTriangle = true;
+    h.triangleGeometryIndex = geometryIndex;
+    h.trianglePrimitiveIndex = primitiveIndex;
+    for (int k = 0; k < 3; ++k)
+        for (int a = 0; a < 3; ++a) h.trianglePositions[k][a] = v[k][a];
 }
 
 }  // namespace vkas

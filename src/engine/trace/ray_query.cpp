@@ -10,6 +10,7 @@
 #include "engine/trace/node_test_sse.hpp"
 #include "engine/trace/sphere_test.hpp"
 #include "engine/trace/traversal_steps.hpp"
+#include "engine/trace/triangle_leaf_test.hpp"
 #include "engine/util/math.hpp"
 #include "vkas/vkas_compat.h"
 
@@ -62,6 +63,7 @@ void enterInstanceWith(RayQueryState& q, const InstanceRecord& inst, const float
     q.inBottomLevel = true;
     q.topLevelStackBase = q.sp;
     q.bottomLeafNext = q.bottomLeafEnd = 0;
+    q.leafLanes = 0;
     push(q, h->root, q.tMin);
 }
 
@@ -99,12 +101,11 @@ inline QueryHit& startCandidate(RayQueryState& q, uint32_t type, float t) {
     return q.candidate;
 }
 
-// Tests `tri` with the positions `v` (the record's own, or [NV-motion] the ones interpolated at the ray time).
-TriangleOutcome testTriangle(RayQueryState& q, const TriangleRecord& tri, const float (*v)[3]) {
-    TriangleCandidate c;
-    if (!triangleCandidate(q.objectRay, q.tMin, q.tMax, q.flags, q.instance->sbtOffsetAndFlags >> 24, tri, v, c))
-        return TriangleOutcome::None;
-    setTriangleHit(q.candidate, kCandidateTriangle, c, tri, q.instance, q.objectRay);
+// A triangle candidate `c` of primitive `primitive` of geometry `geometry` at positions `v`: opaque ones commit at
+// once, non-opaque ones go back to the application.
+TriangleOutcome takeTriangleCandidate(RayQueryState& q, const TriangleCandidate& c, uint32_t geometry,
+                                      uint32_t primitive, const float (*v)[3]) {
+    setTriangleHit(q.candidate, kCandidateTriangle, c, geometry, primitive, v, q.instance, q.objectRay);
     if (c.opaque) {
         commit(q, q.candidate, kCommittedTriangle);
         return TriangleOutcome::Committed;
@@ -124,22 +125,52 @@ bool visitMotionTriangleLeaf(RayQueryState& q) {
         // Degenerate at the ray time (a line or a point): never hit. The build keeps such triangles (they may be
         // degenerate at some times only), and a ray through the line can get a non-zero determinant from rounding.
         if (isDegenerateTriangle(v)) continue;
-        if (testTriangle(q, rec.base, v) == TriangleOutcome::Candidate) return true;
+        TriangleCandidate c;
+        if (!triangleCandidate(q.objectRay, q.tMin, q.tMax, q.flags, q.instance->sbtOffsetAndFlags >> 24,
+                               rec.base.flags, v, c))
+            continue;
+        if (takeTriangleCandidate(q, c, rec.base.geometryIndex, rec.base.primitiveIndex, v) ==
+            TriangleOutcome::Candidate)
+            return true;
         if (q.done) return false;
     }
     return false;
 }
 
-// Tests the rest of the current triangle leaf. Returns true when a candidate needs the application.
+// Tests the rest of the current triangle leaf, four lanes at a time as the batch kernel does (triangle_leaf_test.hpp;
+// the lanes of the current four wait in q.leafEdges / q.leafLanes while the application decides a candidate).
+// Returns true when a candidate needs the application.
 bool visitTriangleLeaf(RayQueryState& q) {
     if (q.bottomLevelMotion) return visitMotionTriangleLeaf(q);  // once per leaf, not per triangle
-    const TriangleRecord* records = triangles(q.bottomLevel);
-    while (q.bottomLeafNext < q.bottomLeafEnd) {
-        const TriangleRecord& tri = records[q.bottomLeafNext++];
-        if (testTriangle(q, tri, tri.v) == TriangleOutcome::Candidate) return true;
+    const ConstTriangleLeaf leaf = triangleLeaf(records(q.bottomLevel), q.bottomLeafFirst, q.bottomLeafCount);
+    const uint32_t instanceFlags = q.instance->sbtOffsetAndFlags >> 24;
+    for (;;) {
+        if (q.leafLanes == 0) {
+            if (q.bottomLeafNext >= q.bottomLeafEnd) return false;
+            const uint32_t lane0 = uint32_t(q.bottomLeafNext - q.bottomLeafFirst);
+            const uint32_t count = q.bottomLeafEnd - q.bottomLeafNext < 4 ? uint32_t(q.bottomLeafEnd - q.bottomLeafNext) : 4;
+            edgesOfFour(leaf, lane0, count, q.objectRay, q.leafEdges);
+            q.leafLane0 = lane0;
+            q.leafLanes = q.leafEdges.covered | q.leafEdges.undecided;
+            q.bottomLeafNext += count;
+            continue;
+        }
+        const uint32_t lane = uint32_t(__builtin_ctz(q.leafLanes));
+        q.leafLanes &= q.leafLanes - 1;
+        const uint32_t at = q.leafLane0 + lane;
+        const uint32_t flags = leaf.flags(at);
+        if (flags & kTriangleDegenerate) continue;
+        TriangleCandidate c;
+        if (!laneIntersection(leaf, q.leafLane0, lane, q.leafEdges, q.objectRay, c.hit) ||
+            !acceptTriangleHit(q.tMin, q.tMax, q.flags, instanceFlags, flags, c))
+            continue;
+        float v[3][3];
+        leaf.positions(at, v);
+        if (takeTriangleCandidate(q, c, leaf.geometryIndex(at), leaf.primitiveIndex()[at], v) ==
+            TriangleOutcome::Candidate)
+            return true;
         if (q.done) return false;  // an opaque hit with TerminateOnFirstHit
     }
-    return false;
 }
 
 // Every AABB the ray meets goes back to the application, opaque or not: only it knows the shape inside.
@@ -235,7 +266,9 @@ void queryInitialize(RayQueryState& q, const std::byte* topLevel, BlasResolver r
     q.sp = 0;
     q.topLevelStackBase = 0;
     q.topLeafNext = q.topLeafEnd = 0;
-    q.bottomLeafNext = q.bottomLeafEnd = 0;
+    q.bottomLeafNext = q.bottomLeafEnd = q.bottomLeafFirst = 0;
+    q.bottomLeafCount = 0;
+    q.leafLanes = 0;
     q.instance = nullptr;
     q.bottomLevel = nullptr;
     q.bottomLevelAabbs = false;
@@ -256,7 +289,7 @@ bool queryProceed(RayQueryState& q) {
     q.candidatePending = false;  // an unconfirmed candidate is dropped
     while (!q.done) {
         if (q.inBottomLevel) {
-            if (q.bottomLeafNext < q.bottomLeafEnd) {
+            if (q.bottomLeafNext < q.bottomLeafEnd || q.leafLanes != 0) {
                 if (q.bottomLevelAabbs    ? visitAabbLeaf(q)
                     : q.bottomLevelSwept ? visitSweptLeaf(q)
                                          : visitTriangleLeaf(q))
@@ -288,8 +321,10 @@ bool queryProceed(RayQueryState& q) {
             visitNode(q, nodes(base), nodeIndex(ref), q.inBottomLevel ? q.objectRay : q.worldRay);
         } else if (isLeaf(ref)) {
             if (q.inBottomLevel) {
-                q.bottomLeafNext = leafFirst(ref);
+                q.bottomLeafFirst = q.bottomLeafNext = leafFirst(ref);
                 q.bottomLeafEnd = leafFirst(ref) + leafCount(ref);
+                q.bottomLeafCount = leafCount(ref);
+                q.leafLanes = 0;
             } else {
                 q.topLeafNext = leafFirst(ref);
                 q.topLeafEnd = leafFirst(ref) + leafCount(ref);

@@ -31,6 +31,24 @@ inline float perturbedSign(float p1x, float p1y, float p2x, float p2y) {
 }
 }  // namespace detail
 
+// The hit of a triangle the ray covers, from its edge functions U, V, W (float, each of one sign and not zero, or
+// recomputed in double and rounded) and the vertices' z before the shear's scale (Az0 = v0[kz] - org[kz], ...).
+// Shared by intersectTriangle and the four-lane leaf test (triangle_leaf_test.hpp), so both give the same bits.
+inline bool coveredTriangleHit(const ShearedRay& r, float U, float V, float W, float Az0, float Bz0, float Cz0,
+                               TriangleHit& hit) {
+    // t and the barycentrics in double: the products of floats are exact there, so only the sums and the
+    // division round (a ray from z = 1 to the plane z = -2 gets t = 3 exactly, not 3 + 2 ulp).
+    const double det = double(U) + double(V) + double(W);
+    if (det == 0.0 || !std::isfinite(det)) return false;  // edge-on: never a candidate
+    const double Az = double(r.sz) * Az0, Bz = double(r.sz) * Bz0, Cz = double(r.sz) * Cz0;
+    const double T = double(U) * Az + double(V) * Bz + double(W) * Cz;
+    hit.t = float(T / det);
+    hit.b = float(double(V) / det);
+    hit.c = float(double(W) / det);
+    hit.frontFace = det > 0.0;
+    return true;
+}
+
 // Returns true and fills `hit` when the ray covers the triangle with a non-zero determinant. The caller
 // applies the t interval.
 inline bool intersectTriangle(const ShearedRay& r, const float v0[3], const float v1[3], const float v2[3],
@@ -58,17 +76,7 @@ inline bool intersectTriangle(const ShearedRay& r, const float v0[3], const floa
     }
     if ((su < 0.0f || sv < 0.0f || sw < 0.0f) && (su > 0.0f || sv > 0.0f || sw > 0.0f)) return false;
     if (su == 0.0f || sv == 0.0f || sw == 0.0f) return false;  // a collapsed edge
-    // t and the barycentrics in double: the products of floats are exact there, so only the sums and the
-    // division round (a ray from z = 1 to the plane z = -2 gets t = 3 exactly, not 3 + 2 ulp).
-    const double det = double(U) + double(V) + double(W);
-    if (det == 0.0 || !std::isfinite(det)) return false;  // edge-on: never a candidate
-    const double Az = double(r.sz) * Az0, Bz = double(r.sz) * Bz0, Cz = double(r.sz) * Cz0;
-    const double T = double(U) * Az + double(V) * Bz + double(W) * Cz;
-    hit.t = float(T / det);
-    hit.b = float(double(V) / det);
-    hit.c = float(double(W) / det);
-    hit.frontFace = det > 0.0;
-    return true;
+    return coveredTriangleHit(r, U, V, W, Az0, Bz0, Cz0, hit);
 }
 
 }  // namespace vkas

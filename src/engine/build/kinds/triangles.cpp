@@ -1,6 +1,7 @@
-// Triangle geometries (VK_GEOMETRY_TYPE_TRIANGLES_KHR) without motion: format::TriangleRecord.
+// Triangle geometries (VK_GEOMETRY_TYPE_TRIANGLES_KHR) without motion: gathered as format::TriangleRecord, stored
+// in format-2 triangle leaves (layout.hpp, TriangleLeaf; the build writes them, structure_build.cpp).
 //   gather: every active triangle, fetched by chunks on several threads; degenerate ones only with ALLOW_UPDATE.
-//   refit:  the records re-fetched leaf by leaf with the reader specialised for the geometry's kinds.
+//   refit:  the leaves re-fetched with the reader specialised for the geometry's kinds.
 //   probe:  active = no NaN vertex X.
 #include <immintrin.h>
 
@@ -143,64 +144,87 @@ inline bool isDegenerateTriangleSse(__m128 v0, __m128 v1, __m128 v2) {
     return _mm_movemask_pd(_mm_cmpeq_pd(n01, zero)) == 3 && (_mm_movemask_pd(_mm_cmpeq_sd(n2, zero)) & 1);
 }
 
-// Triangle records (non-motion). Each leaf's records are re-fetched with the reader specialised for their
+// One triangle of a leaf: the leaf in the source and destination (they may be the same bytes) and its lane.
+struct LaneRef {
+    ConstTriangleLeaf src;
+    MutableTriangleLeaf dst;
+    uint32_t lane;
+    uint32_t primitive() const { return src.primitiveIndex()[lane]; }
+    uint32_t geometry() const { return src.geometryIndex(lane); }
+    uint32_t flags() const { return src.flags(lane); }
+    // Writes the lane's positions, its indices (unless src and dst are one) and its flags.
+    void write(const float (*v)[3], uint32_t flags) const {
+        for (uint32_t k = 0; k < 3; ++k)
+            for (uint32_t a = 0; a < 3; ++a) dst.row(3 * k + a)[lane] = v[k][a];
+        if (static_cast<const void*>(src.base) != static_cast<const void*>(dst.base))
+            dst.primitiveIndex()[lane] = primitive();
+        dst.geometryAndFlags()[lane] = packGeometryAndFlags(geometry(), flags);
+    }
+    void keep() const {  // the lane as it is
+        if (static_cast<const void*>(src.base) == static_cast<const void*>(dst.base)) return;
+        for (uint32_t r = 0; r < kTriangleRows; ++r) dst.row(r)[lane] = src.row(r)[lane];
+        dst.primitiveIndex()[lane] = primitive();
+        dst.geometryAndFlags()[lane] = src.geometryAndFlags()[lane];
+    }
+};
+
+// Format-2 triangle leaves (non-motion). Each leaf's triangles are re-fetched with the reader specialised for their
 // geometry's index type, vertex format and transform (TriangleSource::visit), and the leaf box is extended while
-// each record is written. Float vertices without a transform stay in SSE registers from load to record.
+// each triangle is written. Float vertices without a transform stay in SSE registers from load to leaf.
 class TriangleRefitter {
 public:
     explicit TriangleRefitter(const RefitJob& job) : main_(job), other_(job) {}
 
-    // Refits the records of the leaf slots of one node and sets their boxes. Records whose geometry has float
+    // Refits the triangles of the leaf slots of one node and sets their boxes. Triangles whose geometry has float
     // vertices and no transform are refitted in two steps over the whole node: first their indices are read and
-    // their vertices' lines requested, then the vertices are read and the records written; so the cache misses of
-    // many records overlap instead of forming one dependent chain per record.
+    // their vertices' lines requested, then the vertices are read and the leaves written; so the cache misses of
+    // many triangles overlap instead of forming one dependent chain per triangle.
     void leaves(const std::byte* src, std::byte* dst, const ChildRef refs[kNodeWidth], uint64_t recordCount,
                 SimdBoxNanIgnored boxes[kNodeWidth]) {
         const TriangleSource* s = nullptr;
         uint32_t g = 0;
         for (uint32_t i = 0; i < kNodeWidth && !s; ++i)
-            if (format::isLeaf(refs[i]) && format::leafFirst(refs[i]) < recordCount) {
-                g = loadUnaligned<uint32_t>(src + format::leafFirst(refs[i]) * kSize + kIdsAt);
+            if (inside(refs[i], recordCount)) {
+                g = triangleLeaf(src, leafFirst(refs[i]), leafCount(refs[i])).geometryIndex(0);
                 s = main_.at(g);
             }
         if (s) {
             s->visit([&](auto reader) { batch(reader, g, src, dst, refs, recordCount, boxes); });
         } else {
             for (uint32_t i = 0; i < kNodeWidth; ++i)
-                if (format::isLeaf(refs[i])) {
-                    const uint64_t first = format::leafFirst(refs[i]), end = std::min(first + format::leafCount(refs[i]), recordCount);
-                    for (uint64_t j = first; j < end; ++j) one(src, dst, j, boxes[i]);
-                }
+                if (inside(refs[i], recordCount))
+                    for (uint32_t l = 0; l < leafCount(refs[i]); ++l) one(lane(src, dst, refs[i], l), boxes[i]);
         }
     }
 
 private:
-    static constexpr size_t kSize = sizeof(TriangleRecord);
-    // Where a record's fields are: the refit reads and writes records as bytes (they may alias across src and dst).
-    static constexpr size_t kIdsAt = offsetof(TriangleRecord, geometryIndex);  // geometryIndex, primitiveIndex
-    static constexpr size_t kFlagsAt = offsetof(TriangleRecord, flags);
-    static constexpr size_t kLastCoordinateAt = offsetof(TriangleRecord, v) + 8 * sizeof(float);  // v[2][2]
-    static_assert(offsetof(TriangleRecord, primitiveIndex) == kIdsAt + 4);
     static constexpr uint32_t kBatch = 64;
+
+    // A leaf inside the triangle array (always, for a structure vkas built or loaded; anything else is left alone).
+    static bool inside(ChildRef ref, uint64_t recordCount) {
+        return isLeaf(ref) && leafFirst(ref) <= recordCount && leafCount(ref) <= recordCount - leafFirst(ref);
+    }
+    static LaneRef lane(const std::byte* src, std::byte* dst, ChildRef ref, uint32_t lane) {
+        return {triangleLeaf(src, leafFirst(ref), leafCount(ref)), triangleLeaf(dst, leafFirst(ref), leafCount(ref)), lane};
+    }
 
     struct Pending {
         const std::byte* vertex[3];
-        uint64_t record;
-        uint32_t primitive, flags, slot;
+        LaneRef at;
+        uint32_t slot;
     };
 
     template <class Reader>
     static constexpr bool kFloats = Reader::kVertex != TriangleVertexKind::Other && !Reader::kTransform;
 
-    // One record, through its own geometry's reader (other_, so that main_'s reader stays valid).
-    void one(const std::byte* src, std::byte* dst, uint64_t j, SimdBoxNanIgnored& box) {
-        const uint32_t g = loadUnaligned<uint32_t>(src + j * kSize + kIdsAt);
-        const TriangleSource* s = other_.at(g);
+    // One triangle, through its own geometry's reader (other_, so that main_'s reader stays valid).
+    void one(const LaneRef& at, SimdBoxNanIgnored& box) {
+        const TriangleSource* s = other_.at(at.geometry());
         if (!s) {  // names no geometry of the inputs: kept as it is
-            if (src != dst) std::memcpy(dst + j * kSize, src + j * kSize, kSize);
+            at.keep();
             return;
         }
-        s->visit([&](auto reader) { run(reader, src, dst, j, box); });
+        s->visit([&](auto reader) { run(reader, at, box); });
     }
 
     template <class Reader>
@@ -210,39 +234,34 @@ private:
         uint32_t n = 0;
         const uint32_t count = reader.primitiveCount();
         for (uint32_t i = 0; i < kNodeWidth; ++i) {
-            if (!format::isLeaf(refs[i])) continue;
-            const uint64_t first = format::leafFirst(refs[i]), end = std::min(first + format::leafCount(refs[i]), recordCount);
-            for (uint64_t j = first; j < end; ++j) {
-                uint32_t ids[2];  // geometryIndex, primitiveIndex
-                std::memcpy(ids, src + j * kSize + kIdsAt, 8);
-                if (ids[0] != g) {
-                    one(src, dst, j, boxes[i]);
+            if (!inside(refs[i], recordCount)) continue;
+            for (uint32_t l = 0; l < leafCount(refs[i]); ++l) {
+                const LaneRef at = lane(src, dst, refs[i], l);
+                if (at.geometry() != g) {
+                    one(at, boxes[i]);
                 } else if constexpr (!kFloats<Reader>) {
-                    run(reader, src, dst, j, boxes[i]);
-                } else if (ids[1] >= count) {  // not a primitive of the inputs: kept as it is
-                    if (src != dst) std::memcpy(dst + j * kSize, src + j * kSize, kSize);
+                    run(reader, at, boxes[i]);
+                } else if (at.primitive() >= count) {  // not a primitive of the inputs: kept as it is
+                    at.keep();
                 } else {
                     Pending& p = pending[n++];
-                    p.record = j, p.primitive = ids[1], p.slot = i;
-                    std::memcpy(&p.flags, src + j * kSize + kFlagsAt, 4);
+                    p.at = at, p.slot = i;
                     for (uint32_t c = 0; c < 3; ++c) {
-                        p.vertex[c] = reader.vertexPointer(ids[1], c);
+                        p.vertex[c] = reader.vertexPointer(at.primitive(), c);
                         __builtin_prefetch(p.vertex[c], 0, 3);
                     }
-                    if (n == kBatch) finish<Reader::kVertex>(pending, n, src, dst, g, boxes), n = 0;
+                    if (n == kBatch) finish<Reader::kVertex>(pending, n, boxes), n = 0;
                 }
             }
         }
-        finish<Reader::kVertex>(pending, n, src, dst, g, boxes);
+        finish<Reader::kVertex>(pending, n, boxes);
     }
 
-    // The second step of batch: float vertices without a transform, in SSE registers from load to record.
+    // The second step of batch: float vertices without a transform, in SSE registers from load to leaf.
     template <TriangleVertexKind V>
-    static void finish(const Pending* pending, uint32_t n, const std::byte* src, std::byte* dst, uint32_t g,
-                       SimdBoxNanIgnored boxes[kNodeWidth]) {
+    static void finish(const Pending* pending, uint32_t n, SimdBoxNanIgnored boxes[kNodeWidth]) {
         for (uint32_t k = 0; k < n; ++k) {
             const Pending& p = pending[k];
-            std::byte* out = dst + p.record * kSize;
             __m128 v0 = loadFloatVertex<V>(p.vertex[0]);
             __m128 v1 = loadFloatVertex<V>(p.vertex[1]);
             __m128 v2 = loadFloatVertex<V>(p.vertex[2]);
@@ -256,19 +275,12 @@ private:
                 v2 = _mm_or_ps(v2, _mm_and_ps(u2, quiet));
                 active = ((_mm_movemask_ps(u0) | _mm_movemask_ps(u1) | _mm_movemask_ps(u2)) & 1) == 0;  // raw X
             }
-            uint32_t flags = p.flags & ~kTriangleDegenerate;
+            uint32_t flags = p.at.flags() & ~kTriangleDegenerate;
             if (!active || isDegenerateTriangleSse(v0, v1, v2)) flags |= kTriangleDegenerate;
-            // v0 v1 v2 as 9 consecutive floats: (x0 y0 z0 x1) (y1 z1 x2 y2) z2
-            const __m128 t = _mm_shuffle_ps(v0, v1, _MM_SHUFFLE(0, 0, 2, 2));
-            _mm_storeu_ps(reinterpret_cast<float*>(out), _mm_shuffle_ps(v0, t, _MM_SHUFFLE(2, 0, 1, 0)));
-            _mm_storeu_ps(reinterpret_cast<float*>(out + 16), _mm_shuffle_ps(v1, v2, _MM_SHUFFLE(1, 0, 2, 1)));
-            const float z2 = _mm_cvtss_f32(_mm_movehl_ps(v2, v2));
-            std::memcpy(out + kLastCoordinateAt, &z2, 4);
-            if (src != dst) {
-                const uint32_t ids[2] = {g, p.primitive};
-                std::memcpy(out + kIdsAt, ids, 8);
-            }
-            std::memcpy(out + kFlagsAt, &flags, 4);
+            alignas(16) float v[3][4];
+            _mm_store_ps(v[0], v0), _mm_store_ps(v[1], v1), _mm_store_ps(v[2], v2);
+            const float w[3][3] = {{v[0][0], v[0][1], v[0][2]}, {v[1][0], v[1][1], v[1][2]}, {v[2][0], v[2][1], v[2][2]}};
+            p.at.write(w, flags);
             if (active) {
                 SimdBoxNanIgnored& box = boxes[p.slot];
                 box.extend(v0), box.extend(v1), box.extend(v2);
@@ -276,26 +288,19 @@ private:
         }
     }
 
-    // Record j through any reader (whose geometry the record names).
+    // One triangle through any reader (whose geometry it names).
     template <class Reader>
-    static void run(const Reader& reader, const std::byte* src, std::byte* dst, uint64_t j, SimdBoxNanIgnored& box) {
-        const std::byte* in = src + j * kSize;
-        std::byte* out = dst + j * kSize;
-        uint32_t ids[2], flags;  // geometryIndex, primitiveIndex
-        std::memcpy(ids, in + kIdsAt, 8);
-        std::memcpy(&flags, in + kFlagsAt, 4);
-        if (ids[1] >= reader.primitiveCount()) {  // not a primitive of the inputs: kept as it is
-            if (in != out) std::memcpy(out, in, kSize);
+    static void run(const Reader& reader, const LaneRef& at, SimdBoxNanIgnored& box) {
+        if (at.primitive() >= reader.primitiveCount()) {  // not a primitive of the inputs: kept as it is
+            at.keep();
             return;
         }
         float v[3][3];
-        const bool active = reader.fetch(ids[1], v);
+        const bool active = reader.fetch(at.primitive(), v);
         // Degenerate is re-decided: a triangle that has area again is hit again, and vice versa.
-        flags &= ~kTriangleDegenerate;
+        uint32_t flags = at.flags() & ~kTriangleDegenerate;
         if (!active || isDegenerateTriangle(v)) flags |= kTriangleDegenerate;
-        std::memcpy(out, v, sizeof v);
-        if (in != out) std::memcpy(out + kIdsAt, ids, 8);
-        std::memcpy(out + kFlagsAt, &flags, 4);
+        at.write(v, flags);
         if (active)
             for (const auto& q : v) box.extend(_mm_setr_ps(q[0], q[1], q[2], 0.0f));
     }
@@ -303,10 +308,19 @@ private:
     TriangleInputs main_, other_;
 };
 
+// The probe names a triangle by its leaf lane: records() walks the leaves (refit::forEachLeaf), so key() takes the
+// triangle's leaf and lane instead of a record index.
 struct TriangleProbe {
     TriangleInputs inputs;
     explicit TriangleProbe(const RefitJob& job) : inputs(job) {}
-    refit::RecordKey key(const std::byte* records, uint64_t j) const { return refit::recordKeyOf<TriangleRecord>(records, j); }
+    template <class Fn>
+    void forEachKey(const std::byte* block, const Fn& fn) const {
+        const std::byte* recs = records(block);
+        refit::forEachLeaf(block, [&](ChildRef ref) {
+            const ConstTriangleLeaf leaf = triangleLeaf(recs, leafFirst(ref), leafCount(ref));
+            for (uint32_t l = 0; l < leaf.n; ++l) fn(refit::RecordKey{leaf.geometryIndex(l), leaf.primitiveIndex()[l]});
+        });
+    }
     void probe(uint32_t g, uint32_t i, bool& active, bool& storable) {
         float v[3][3];
         const TriangleSource* t = inputs.at(g);
