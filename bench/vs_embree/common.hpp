@@ -65,8 +65,9 @@ Box transformBox(const Box& b, const Transform& x);
 Box sceneBounds(const Scene& s);
 
 // A closest or any hit, as both engines report it. prim < 0: a miss. inst: the instance (0 for a single mesh).
+// geom: the geometry index (vkasTraceRays; -1 where not read: Embree, the ray-query loop).
 struct Hit {
-    int32_t inst = -1, prim = -1;
+    int32_t inst = -1, prim = -1, geom = -1;
     float t = 0, u = 0, v = 0;
     bool hit() const { return prim >= 0; }
 };

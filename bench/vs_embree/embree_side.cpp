@@ -186,8 +186,8 @@ EmbreeEngine::EmbreeEngine(unsigned threads) : threads_(threads) {
 }
 
 EmbreeEngine::~EmbreeEngine() {
-    if (traceScene_) rtcReleaseScene(traceScene_);
-    if (traceChild_) rtcReleaseScene(traceChild_);
+    for (RTCScene s : {traceScene_, traceChild_, defaultScene_, defaultChild_})
+        if (s) rtcReleaseScene(s);
     rtcReleaseDevice(device_);
 }
 
@@ -328,24 +328,28 @@ SahCost EmbreeEngine::userBvhSah(const std::vector<Box>& boxes, RTCBuildQuality 
 }
 
 void EmbreeEngine::makeTraceScene(const Scene& scene) {
-    if (traceScene_) rtcReleaseScene(traceScene_), traceScene_ = nullptr;
-    if (traceChild_) rtcReleaseScene(traceChild_), traceChild_ = nullptr;
-    RTCScene mesh = meshScene(scene.mesh, RTC_BUILD_QUALITY_MEDIUM, RTC_BUILD_QUALITY_MEDIUM, RTC_SCENE_FLAG_ROBUST,
-                              scene.mesh.vertices.data());
-    commit(mesh);
-    if (!scene.manyInstances()) {
-        traceScene_ = mesh;
-        return;
+    for (RTCScene* s : {&traceScene_, &traceChild_, &defaultScene_, &defaultChild_})
+        if (*s) rtcReleaseScene(*s), *s = nullptr;
+    for (const RTCSceneFlags flags : {RTC_SCENE_FLAG_ROBUST, RTC_SCENE_FLAG_NONE}) {
+        RTCScene& top = flags == RTC_SCENE_FLAG_ROBUST ? traceScene_ : defaultScene_;
+        RTCScene& child = flags == RTC_SCENE_FLAG_ROBUST ? traceChild_ : defaultChild_;
+        RTCScene mesh = meshScene(scene.mesh, RTC_BUILD_QUALITY_MEDIUM, RTC_BUILD_QUALITY_MEDIUM, flags,
+                                  scene.mesh.vertices.data());
+        commit(mesh);
+        if (!scene.manyInstances()) {
+            top = mesh;
+            continue;
+        }
+        child = mesh;
+        top = instanceScene(mesh, scene.instances, RTC_BUILD_QUALITY_MEDIUM, flags);
+        commit(top);
     }
-    traceChild_ = mesh;
-    traceScene_ = instanceScene(mesh, scene.instances, RTC_BUILD_QUALITY_MEDIUM, RTC_SCENE_FLAG_ROBUST);
-    commit(traceScene_);
 }
 
 double EmbreeEngine::trace(EmbreeCall call, bool anyHit, bool coherent, const std::vector<VkasRay>& rays,
-                           std::vector<Hit>& hits, unsigned threads, int reps) {
+                           std::vector<Hit>& hits, unsigned threads, int reps, TraceScene which) {
     hits.assign(rays.size(), Hit{});
-    RTCScene scene = traceScene_;
+    RTCScene scene = which == TraceScene::Robust ? traceScene_ : defaultScene_;
     const RTCIntersectContextFlags flags =
         coherent ? RTC_INTERSECT_CONTEXT_FLAG_COHERENT : RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT;
     auto chunk = [&](size_t begin, size_t end) {

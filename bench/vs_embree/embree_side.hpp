@@ -1,7 +1,8 @@
 // The Embree 3 side: scene builds at each build quality (timed rtcCommitScene, memory measured through the device's
 // memory monitor), refits of a dynamic scene, the SAH cost of a user BVH built by rtcBuildBVH with the same quality,
 // and traversal with rtcIntersect1/rtcOccluded1, the 8- and 16-ray packet calls and the ray-stream calls.
-// The traced scene is RTC_SCENE_FLAG_ROBUST; the build rows use no scene flag, because Embree 3.13 ignores quality
+// The traced scene is RTC_SCENE_FLAG_ROBUST (watertight: the fair peer); a second one with Embree's default flags
+// (not robust) is traced too, as a second column. The build rows use no scene flag, because Embree 3.13 ignores quality
 // HIGH (no spatial splits) in a ROBUST scene. Vertex and index arrays are shared (not copied, not counted as Embree
 // memory).
 #pragma once
@@ -14,6 +15,8 @@
 namespace vb {
 
 enum class EmbreeCall { One, Packet8, Packet16, Stream };
+// Which traced scene: RTC_SCENE_FLAG_ROBUST, or Embree's default flags (not robust); both of quality MEDIUM.
+enum class TraceScene { Robust, Default };
 const char* embreeCallName(EmbreeCall c, bool anyHit);
 
 class EmbreeEngine {
@@ -43,10 +46,10 @@ public:
     SahCost userBvhSah(const Mesh& mesh, RTCBuildQuality quality);
     SahCost userBvhSah(const std::vector<Box>& boxes, RTCBuildQuality quality);
 
-    // The scene traced: MEDIUM quality (Embree's default), robust.
+    // The scenes traced: MEDIUM quality (Embree's default), robust and with the default flags.
     void makeTraceScene(const Scene& scene);
     double trace(EmbreeCall call, bool anyHit, bool coherent, const std::vector<VkasRay>& rays, std::vector<Hit>& hits,
-                 unsigned threads, int reps);
+                 unsigned threads, int reps, TraceScene which = TraceScene::Robust);
 
 private:
     RTCScene meshScene(const Mesh& mesh, RTCBuildQuality sceneQuality, RTCBuildQuality geometryQuality,
@@ -61,7 +64,8 @@ private:
     unsigned threads_ = 0;
     RTCDevice device_ = nullptr;
     std::atomic<int64_t> memory_{0};
-    RTCScene traceChild_ = nullptr, traceScene_ = nullptr;
+    RTCScene traceChild_ = nullptr, traceScene_ = nullptr;      // robust
+    RTCScene defaultChild_ = nullptr, defaultScene_ = nullptr;  // the default flags
 };
 
 }  // namespace vb

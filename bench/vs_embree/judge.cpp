@@ -107,7 +107,15 @@ Judge::Judge(const Scene& s) : impl_(std::make_unique<Impl>()) {
 
 Judge::~Judge() = default;
 
-Judgement Judge::judge(const VkasRay& ray, const Hit& vkas, const Hit& embree, bool anyHit) const {
+bool Judge::hitsTriangle(const VkasRay& ray, const Hit& h) const {
+    if (!h.hit()) return false;
+    const oracle::Ray r{{ray.origin[0], ray.origin[1], ray.origin[2]}, ray.tMin,
+                        {ray.direction[0], ray.direction[1], ray.direction[2]}, ray.tMax};
+    const oracle::TriangleTest x = oracle::examineTriangle(impl_->scene, r, h.inst, 0, h.prim);
+    return x.status == oracle::TriangleStatus::Candidate && std::abs(double(h.t) - x.t) <= x.tTolerance;
+}
+
+Judgement Judge::judge(const VkasRay& ray, const Hit& vkas, const Hit& embree, bool anyHit, bool embreeNamesTriangle) const {
     const oracle::Ray r{{ray.origin[0], ray.origin[1], ray.origin[2]}, ray.tMin,
                         {ray.direction[0], ray.direction[1], ray.direction[2]}, ray.tMax};
     oracle::Result res = oracle::trace(impl_->scene, r, 0, 0xFF);
@@ -177,7 +185,7 @@ Judgement Judge::judge(const VkasRay& ray, const Hit& vkas, const Hit& embree, b
         return a;
     };
 
-    const Assessment av = assess(vkas, true), ae = assess(embree, !anyHit);
+    const Assessment av = assess(vkas, true), ae = assess(embree, embreeNamesTriangle);
 
     // The exact answer: the oracle's double-precision computation without tolerances (every weight >= 0,
     // tMin < t < tMax), and how far each engine is from it, in units of the float precision of the object-space

@@ -46,7 +46,16 @@ public:
     Judge& operator=(const Judge&) = delete;
 
     // `embree` of an any-hit ray (rtcOccluded1) names no triangle. Thread-safe.
-    Judgement judge(const VkasRay& ray, const Hit& vkas, const Hit& embree, bool anyHit) const;
+    Judgement judge(const VkasRay& ray, const Hit& vkas, const Hit& embree, bool anyHit) const {
+        return judge(ray, vkas, embree, anyHit, !anyHit);
+    }
+    // The same with the second answer's any hit naming its triangle or not (true: two vkas builds compared,
+    // --compare-hits; the "Embree" side of the texts is then the other build).
+    Judgement judge(const VkasRay& ray, const Hit& vkas, const Hit& embree, bool anyHit, bool embreeNamesTriangle) const;
+    // Whether the hit's triangle is a candidate of the ray with t within its tolerance: judge()'s rule for an any hit
+    // that names its triangle, without tracing the whole scene (a closest hit must also have no nearer required
+    // candidate).
+    bool hitsTriangle(const VkasRay& ray, const Hit& hit) const;
 
 private:
     struct Impl;

@@ -1,9 +1,12 @@
-// vkas_bench_embree: vkas against Intel Embree 3 in one process, on the same meshes and rays (issue 7).
+// vkas_bench_embree: vkas against Intel Embree 3 in one process, on the same meshes and rays (issues 7 and 15).
 // Builds (default, PREFER_FAST_TRACE, PREFER_FAST_BUILD, refit against Embree MEDIUM, HIGH, LOW, REFIT; one thread),
 // traversal (camera, diffuse, shadow rays; vkasTraceRays and vkasRayQuery* against rtcIntersect1/rtcOccluded1 on one
-// thread and against Embree's best call on all threads), hit agreement, deferred-build thread scaling, and the
-// issue's targets. Prints one table and optionally writes JSON. See docs/PERFORMANCE.md ("Comparison with Embree").
+// thread and against Embree's best call on all threads, each on a ROBUST scene and on one with Embree's default
+// flags), hit agreement, deferred-build thread scaling, issue 15's targets, and a dump / comparison of the hits of
+// two vkas builds (--dump-hits, --compare-hits). Prints one table and optionally writes JSON. See
+// docs/PERFORMANCE.md ("Comparison with Embree").
 #include "embree_side.hpp"
+#include "hitfile.hpp"
 #include "judge.hpp"
 #include "rays.hpp"
 #include "report.hpp"
@@ -14,7 +17,9 @@
 
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
+#include <memory>
 #include <random>
 #include <sstream>
 
@@ -31,6 +36,7 @@ struct Options {
     std::string json, threadsList, scalingScene, dataDir;
     bool quick = false, noScaling = false;
     std::string showDisagreements;  // empty: none; "all" or a number: that many rays per kind
+    std::string dumpHits, compareHits;
 };
 
 struct Target {
@@ -54,6 +60,8 @@ const Variant kVariants[] = {
 struct BuildRow {
     std::string vkasName, embreeName;
     double vkasMs, vkasBytes, vkasSah, embreeMs, embreeBytes, embreeSah;  // bytes per primitive; SAH < 0: not known
+    // vkas, bytes: the build-sizes query's accelerationStructureSize, the compacted size, ACCELERATION_STRUCTURE_SIZE
+    double sizeQuery = 0, compacted = 0, used = 0;
 };
 
 std::string ratio(double r) {
@@ -84,6 +92,9 @@ public:
     explicit Bench(const Options& o) : o_(o) {}
     std::vector<Target> targets;
     Json json;
+    std::unique_ptr<HitFileWriter> dump;
+    std::unique_ptr<HitFileReader> compare;
+    size_t hitsDifferent = 0, hitsRefused = 0;  // --compare-hits: rays that differ (not ties); sections not compared
 
     void runScene(const Scene& sc);
     void runScaling(const Scene& sc, const std::vector<unsigned>& threadCounts);
@@ -119,9 +130,19 @@ void Bench::printBuilds(const Scene& sc, const std::vector<BuildRow>& rows) {
         json.field((std::string("vkas_bytes_per_") + unit).c_str(), r.vkasBytes).field("vkas_sah", r.vkasSah);
         json.field("embree", r.embreeName).field("embree_ms", r.embreeMs).field("embree_mprims_per_s", n / r.embreeMs / 1000);
         json.field((std::string("embree_bytes_per_") + unit).c_str(), r.embreeBytes).field("embree_sah", r.embreeSah);
-        json.field("speed_ratio", r.embreeMs / r.vkasMs).end('}');
+        json.field("speed_ratio", r.embreeMs / r.vkasMs).field("vkas_size_query_bytes", r.sizeQuery);
+        json.field("vkas_compacted_bytes", r.compacted).field("vkas_structure_size_bytes", r.used);
+        json.field("size_query_over_compacted", r.sizeQuery / r.compacted).end('}');
     }
     json.end(']');
+    std::printf("  build-sizes query (accelerationStructureSize) / compacted size:");
+    for (const BuildRow& r : rows)
+        std::printf(" %s %s (%.0f / %.0f B)%s", r.vkasName.c_str(), ratio(r.sizeQuery / r.compacted).c_str(), r.sizeQuery,
+                    r.compacted, &r == &rows.back() ? "\n" : ",");
+    for (const BuildRow& r : rows)
+        if (r.sizeQuery < r.used || r.sizeQuery < r.compacted)
+            std::printf("  WARNING: %s: the build-sizes query (%.0f B) is below the structure's size (%.0f B, compacted "
+                        "%.0f B)\n", r.vkasName.c_str(), r.sizeQuery, r.used, r.compacted);
 }
 
 void Bench::runScene(const Scene& sc) {
@@ -163,6 +184,7 @@ void Bench::runScene(const Scene& sc) {
         VkasEngine::Build b = inst ? vk1.buildTop(sc.instances, blas.as, var.flags, o_.reps)
                                    : vk1.buildBottom(sc.mesh, var.flags, o_.reps);
         row.vkasMs = b.ms, row.vkasBytes = double(b.compactedSize) / prims, row.vkasSah = vk1.sah(b.s).cost();
+        row.sizeQuery = double(b.sizeQuery), row.compacted = double(b.compactedSize), row.used = double(b.usedSize);
         VkasEngine::Build top = inst ? b : vk1.buildTop({}, b.s.as, 0, 1);
         for (int k = 0; k < 3; ++k) {
             std::vector<Hit> hits;
@@ -190,6 +212,7 @@ void Bench::runScene(const Scene& sc) {
         row.vkasMs = inst ? vk1.refitTop(b.s, sc.instances, movedXs, blas.as, flags, o_.reps)
                           : vk1.refitBottom(b.s, sc.mesh, movedV, flags, o_.reps);
         row.vkasBytes = double(b.compactedSize) / prims, row.vkasSah = vk1.sah(b.s).cost();
+        row.sizeQuery = double(b.sizeQuery), row.compacted = double(b.compactedSize), row.used = double(b.usedSize);
         const EmbreeEngine::Build e = inst ? em1.recommitInstances(sc.mesh, sc.instances, movedXs, o_.reps)
                                            : em1.refitMesh(sc.mesh, movedV, o_.reps);
         row.embreeMs = e.ms, row.embreeBytes = double(e.bytes) / prims, row.embreeSah = -1;
@@ -207,45 +230,61 @@ void Bench::runScene(const Scene& sc) {
         nBlas = vkN.buildBottom(sc.mesh, 0, 1).s;
         nTlas = vkN.buildTop({}, nBlas.as, 0, 1).s;
     }
-    std::printf("  %-8s %-9s %-30s %8s | %-22s %8s | %6s\n", "rays", "threads", "vkas", "Mrays/s", "Embree", "Mrays/s", "ratio");
+    std::printf("  %-8s %-9s %-30s %8s | %-22s %8s %6s | %-22s %8s %6s | %7s\n", "rays", "threads", "vkas", "Mrays/s",
+                "Embree ROBUST", "Mrays/s", "ratio", "Embree default flags", "Mrays/s", "ratio", "/batch");
     json.begin("traversal", '[');
-    double rate[3][4] = {};  // [kind]: vkas batch 1, vkas query 1, embree 1 thread, vkas batch N
-    double emBestN[3] = {};
+    double rate[3][4] = {};  // [kind]: vkas batch 1, vkas query 1, Embree 1 thread (ROBUST), vkas batch N
+    double emDefault1[3] = {};                   // Embree 1 thread, the default flags
+    double emBestN[3] = {}, emDefaultBestN[3] = {};  // Embree's best call on all threads: ROBUST, default flags
     std::string agreementText[3];
     const size_t n = o_.rays;
     const Judge judge(sc);  // the oracle, for the rays where vkas and Embree differ
     size_t showLimit = 0;
     if (!o_.showDisagreements.empty())
         showLimit = o_.showDisagreements == "all" ? SIZE_MAX : size_t(std::stoull(o_.showDisagreements));
+    auto row = [](const char* kind, const std::string& threads, const std::string& vkName, double vk, const std::string& e,
+                  double er, const std::string& ed, double edr, const std::string& extra) {
+        std::printf("  %-8s %-9s %-30s %8.3f | %-22s %8.3f %6s | %-22s %8.3f %6s | %7s\n", kind, threads.c_str(),
+                    vkName.c_str(), vk, e.c_str(), er, ratio(vk / er).c_str(), ed.c_str(), edr, ratio(vk / edr).c_str(),
+                    extra.c_str());
+    };
     for (int k = 0; k < 3; ++k) {
         const bool anyHit = k == 2, coherent = k == 0;
         const char* kind = rayKindName(RayKind(k));
         std::vector<Hit> em1Hits, rqHits, batchN, tmp, emClosest;
         const double emMs = emN.trace(EmbreeCall::One, anyHit, coherent, rays[k], em1Hits, 1, o_.reps);
+        const double emDMs = emN.trace(EmbreeCall::One, anyHit, coherent, rays[k], tmp, 1, o_.reps, TraceScene::Default);
         const double rqMs = vk1.traceRayQuery(defaultTlas.as, anyHit, rays[k], rqHits, o_.reps);
         const double bNMs = vkN.traceBatch(nTlas.as, anyHit, rays[k], batchN, o_.reps);
         rate[k][0] = variantRate[0][k], rate[k][1] = n / rqMs / 1000, rate[k][2] = n / emMs / 1000, rate[k][3] = n / bNMs / 1000;
+        emDefault1[k] = n / emDMs / 1000;
         const char* mode = anyHit ? "any-hit" : "closest";
         const std::string batchName = std::string("vkasTraceRays ") + mode;
         const char* e1 = embreeCallName(EmbreeCall::One, anyHit);
-        std::printf("  %-8s %-9s %-30s %8.3f | %-22s %8.3f | %6s\n", kind, "1", batchName.c_str(), rate[k][0], e1, rate[k][2],
-                    ratio(rate[k][0] / rate[k][2]).c_str());
-        std::printf("  %-8s %-9s %-30s %8.3f | %-22s %8.3f | %6s\n", kind, "1", "vkasRayQuery*", rate[k][1], e1, rate[k][2],
-                    ratio(rate[k][1] / rate[k][2]).c_str());
+        row(kind, "1", batchName, rate[k][0], e1, rate[k][2], e1, emDefault1[k], "");
+        row(kind, "1", "vkasRayQuery*", rate[k][1], e1, rate[k][2], e1, emDefault1[k], ratio(rate[k][1] / rate[k][0]));
         json.begin(nullptr, '{').field("rays", kind).field("threads", 1.0).field("vkas_batch_mrays", rate[k][0]);
-        json.field("vkas_ray_query_mrays", rate[k][1]).field("embree_call", e1).field("embree_mrays", rate[k][2]).end('}');
-        // All threads: Embree's calls, the best one named.
-        EmbreeCall best = EmbreeCall::One;
+        json.field("vkas_ray_query_mrays", rate[k][1]).field("embree_call", e1).field("embree_mrays", rate[k][2]);
+        json.field("embree_default_flags_mrays", emDefault1[k]).field("batch_vs_embree", rate[k][0] / rate[k][2]);
+        json.field("batch_vs_embree_default_flags", rate[k][0] / emDefault1[k]);
+        json.field("ray_query_vs_batch", rate[k][1] / rate[k][0]).end('}');
+        // All threads: Embree's calls on both scenes, the best one named.
+        EmbreeCall best = EmbreeCall::One, bestDefault = EmbreeCall::One;
         json.begin(nullptr, '{').field("rays", kind).field("threads", double(o_.threads)).field("vkas_batch_mrays", rate[k][3]);
         for (EmbreeCall c : {EmbreeCall::One, EmbreeCall::Packet8, EmbreeCall::Packet16, EmbreeCall::Stream}) {
             const double r = n / emN.trace(c, anyHit, coherent, rays[k], tmp, o_.threads, o_.reps) / 1000;
             json.field((std::string("embree_") + embreeCallName(c, anyHit) + "_mrays").c_str(), r);
             if (r > emBestN[k]) emBestN[k] = r, best = c;
+            const double rd = n / emN.trace(c, anyHit, coherent, rays[k], tmp, o_.threads, o_.reps, TraceScene::Default) / 1000;
+            json.field((std::string("embree_default_flags_") + embreeCallName(c, anyHit) + "_mrays").c_str(), rd);
+            if (rd > emDefaultBestN[k]) emDefaultBestN[k] = rd, bestDefault = c;
         }
-        json.end('}');
-        std::printf("  %-8s %-9u %-30s %8.3f | %-22s %8.3f | %6s\n", kind, o_.threads, batchName.c_str(), rate[k][3],
-                    (std::string(embreeCallName(best, anyHit)) + " (best)").c_str(), emBestN[k],
-                    ratio(rate[k][3] / emBestN[k]).c_str());
+        json.field("embree_best_call", embreeCallName(best, anyHit)).field("embree_best_mrays", emBestN[k]);
+        json.field("embree_default_flags_best_call", embreeCallName(bestDefault, anyHit));
+        json.field("embree_default_flags_best_mrays", emDefaultBestN[k]).field("batch_vs_embree_best", rate[k][3] / emBestN[k]);
+        json.field("batch_vs_embree_default_flags_best", rate[k][3] / emDefaultBestN[k]).end('}');
+        row(kind, std::to_string(o_.threads), batchName, rate[k][3], std::string(embreeCallName(best, anyHit)) + " (best)",
+            emBestN[k], std::string(embreeCallName(bestDefault, anyHit)) + " (best)", emDefaultBestN[k], "");
         // Agreement with Embree, and vkas's paths with each other.
         if (anyHit) emN.trace(EmbreeCall::One, false, false, rays[k], emClosest, o_.threads, 1);
         // Every ray where the results differ, decided by the oracle (judge.hpp).
@@ -283,7 +322,7 @@ void Bench::runScene(const Scene& sc) {
     for (int v = 1; v < 3; ++v)
         for (int k = 0; k < 3; ++k) {
             const std::string name = std::string("vkasTraceRays ") + kVariants[v].name;
-            std::printf("  %-8s %-9s %-30s %8.3f | %-22s %8.3f | %6s\n", rayKindName(RayKind(k)), "1", name.c_str(),
+            std::printf("  %-8s %-9s %-30s %8.3f | %-22s %8.3f %6s |\n", rayKindName(RayKind(k)), "1", name.c_str(),
                         variantRate[v][k], "(vkas default build)", variantRate[0][k],
                         ratio(variantRate[v][k] / variantRate[0][k]).c_str());
             json.begin(nullptr, '{').field("rays", rayKindName(RayKind(k))).field("threads", 1.0);
@@ -291,27 +330,72 @@ void Bench::runScene(const Scene& sc) {
             json.field("vkas_default_batch_mrays", variantRate[0][k]).end('}');
         }
     json.end(']');
-    std::printf("  agreement (vkasTraceRays 1 thread, default build, against Embree):\n");
+    std::printf("  agreement (vkasTraceRays 1 thread, default build, against Embree ROBUST):\n");
     for (const std::string& s : agreementText) std::printf("    %s\n", s.c_str());
+
+    // --- the hits of another vkas build (--dump-hits, --compare-hits) ---
+    if (dump)
+        for (int k = 0; k < 3; ++k) dump->add(sc.name, RayKind(k), rays[k], vkBatch1[k]);
+    if (compare) {
+        std::printf("  hits (vkasTraceRays 1 thread, default build) against %s:\n", compare->path().c_str());
+        json.begin("hit_comparison", '[');
+        for (int k = 0; k < 3; ++k) {
+            const bool anyHit = k == 2;
+            const char* kind = rayKindName(RayKind(k));
+            json.begin(nullptr, '{').field("rays", kind);
+            HitFileReader::Section* sec = compare->take(sc.name, RayKind(k));
+            const uint64_t hash = rayHash(rays[k]);
+            if (!sec) {
+                std::printf("    %-8s not compared (not in the file)\n", kind);
+                json.field("compared", false).field("why", "not in the file");
+            } else if (sec->rays != rays[k].size() || sec->hash != hash) {
+                std::printf("    %-8s NOT COMPARED: the rays differ from the file's (%llu rays, hash %016llx; this run: %zu, "
+                            "%016llx): not the same options?\n",
+                            kind, (unsigned long long)sec->rays, (unsigned long long)sec->hash, rays[k].size(),
+                            (unsigned long long)hash);
+                json.field("compared", false).field("why", "the rays differ from the file's");
+                ++hitsRefused;
+            } else {
+                const std::vector<Hit> before = compare->read(*sec);
+                const HitComparison c = compareHitSets(rays[k], vkBatch1[k], before, anyHit, judge, o_.threads);
+                std::printf("    %-8s %zu rays: %zu identical, %zu ties (another primitive at the same t, or both acceptable "
+                            "to the oracle), %zu different%s\n",
+                            kind, c.rays, c.identical, c.ties, c.different.size(), c.different.empty() ? "" : ":");
+                for (size_t d = 0; d < c.different.size(); ++d) {
+                    const size_t i = c.different[d];
+                    std::printf("      %s\n",
+                                hitDifferenceText(kind, i, rays[k][i], vkBatch1[k][i], before[i], c.verdicts[d], anyHit).c_str());
+                }
+                hitsDifferent += c.different.size();
+                json.field("compared", true).field("rays_compared", double(c.rays)).field("identical", double(c.identical));
+                json.field("ties", double(c.ties)).field("different", double(c.different.size()));
+            }
+            json.end('}');
+        }
+        json.end(']');
+    }
     json.end('}');
 
-    // --- targets ---
+    // --- targets (issue 15) ---
     const std::string s = sc.name;
-    const BuildRow &def = rows[0], &trace = rows[1], &fast = rows[2], &refit = rows[3];
-    targets.push_back({s, "default build >= 1.5x Embree MEDIUM (1 thread)", def.embreeMs / def.vkasMs, 1.5, true});
-    targets.push_back({s, "default build SAH cost <= Embree MEDIUM's", def.vkasSah / def.embreeSah, 1.0, false});
-    targets.push_back({s, "PREFER_FAST_BUILD >= 2x Embree LOW", fast.embreeMs / fast.vkasMs, 2.0, true});
-    targets.push_back({s, "PREFER_FAST_BUILD diffuse tracing within 25% of default (time)", variantRate[2][1] / variantRate[0][1], 0.8, true});
-    if (sc.thin)
-        targets.push_back({s, "PREFER_FAST_TRACE diffuse tracing >= 1.1x default", variantRate[1][1] / variantRate[0][1], 1.1, true});
-    targets.push_back({s, "PREFER_FAST_TRACE build >= Embree HIGH", trace.embreeMs / trace.vkasMs, 1.0, true});
-    targets.push_back({s, "refit >= Embree REFIT", refit.embreeMs / refit.vkasMs, 1.0, true});
+    const BuildRow& def = rows[0];
+    targets.push_back({s, "vkasTraceRays closest, camera, 1 thread >= 1.25x rtcIntersect1", rate[0][0] / rate[0][2], 1.25, true});
     targets.push_back({s, "vkasTraceRays closest, diffuse, 1 thread >= 1.25x rtcIntersect1", rate[1][0] / rate[1][2], 1.25, true});
     targets.push_back({s, "vkasTraceRays any-hit, shadow, 1 thread >= 1.25x rtcOccluded1", rate[2][0] / rate[2][2], 1.25, true});
     for (int k = 0; k < 3; ++k)
+        targets.push_back({s, std::string("vkasRayQuery* ") + rayKindName(RayKind(k)) + " >= 0.9x vkasTraceRays, 1 thread",
+                           rate[k][1] / rate[k][0], 0.9, true});
+    for (int k = 0; k < 3; ++k)
         targets.push_back({s, std::string("vkasTraceRays ") + rayKindName(RayKind(k)) + ", all threads >= Embree's best call",
                            rate[k][3] / emBestN[k], 1.0, true});
-    targets.push_back({s, "compacted bytes per primitive <= Embree MEDIUM's", def.vkasBytes / def.embreeBytes, 1.0, false});
+    if (inst) {
+        targets.push_back({s, "compacted bytes per instance <= Embree MEDIUM's", def.vkasBytes / def.embreeBytes, 1.0, false});
+    } else {
+        targets.push_back({s, "compacted bytes per triangle <= 0.75x Embree MEDIUM's", def.vkasBytes / def.embreeBytes, 0.75, false});
+        targets.push_back({s, "build-sizes query <= 1.3x the compacted size", def.sizeQuery / def.compacted, 1.3, false});
+        targets.push_back({s, "build-sizes query >= the structure's size (a safe bound)",
+                           def.sizeQuery / std::max(def.used, def.compacted), 1.0, true});
+    }
 
     vkN.destroy(nTlas);
     vkN.destroy(nBlas);
@@ -337,8 +421,6 @@ void Bench::runScaling(const Scene& sc, const std::vector<unsigned>& threadCount
         std::printf("  %7u | %10.1f %8.2f %8.2f | %10.1f %8.2f %8.2f | %6s\n", t, b.ms, tris / b.ms / 1000, vk1 / b.ms, emMs,
                     tris / emMs / 1000, em1 / emMs, ratio(emMs / b.ms).c_str());
         json.begin(nullptr, '{').field("threads", double(t)).field("vkas_ms", b.ms).field("embree_ms", emMs).end('}');
-        if (t == 16 && threadCounts.front() == 1)
-            targets.push_back({sc.name, "deferred build, 16 joined threads >= 12x 1 thread", vk1 / b.ms, 12.0, true});
     }
     json.end(']').end('}');
 }
@@ -371,6 +453,12 @@ int main(int argc, char** argv) {
                        : std::string("expects a count or 'all'");
         });
     app.add_option("--json", o.json, "write the results as JSON to this file");
+    app.add_option("--dump-hits", o.dumpHits,
+                   "write every ray's one-thread vkasTraceRays result (every scene and ray kind of the run) to this "
+                   "binary file, for --compare-hits in another build");
+    app.add_option("--compare-hits", o.compareHits,
+                   "compare this run's one-thread vkasTraceRays results with those of a file --dump-hits wrote (same "
+                   "options); exits non-zero when a ray differs other than by a tie");
     app.add_option("--data-dir", o.dataDir, "where scripts/setup-bench.sh extracted the CGAL meshes");
     app.add_flag("--quick", o.quick, "a short smoke run: the bunny and a small instance scene, few rays, one repetition");
     CLI11_PARSE(app, argc, argv);
@@ -401,13 +489,34 @@ int main(int argc, char** argv) {
         while (std::getline(ss, item, ',')) threadCounts.push_back(unsigned(std::stoul(item)));
     }
 
+    Bench bench(o);
+    Json& j = bench.json;
+    try {
+        std::error_code ec;
+        if (!o.dumpHits.empty() && !o.compareHits.empty() &&
+            (o.dumpHits == o.compareHits || std::filesystem::equivalent(o.dumpHits, o.compareHits, ec)))
+            throw std::runtime_error("--dump-hits and --compare-hits name the same file");
+        if (!o.compareHits.empty()) {
+            bench.compare = std::make_unique<HitFileReader>(o.compareHits);
+        }
+        if (!o.dumpHits.empty()) {
+            char writer[256];
+            std::snprintf(writer, sizeof writer, "vkas %d.%d.%d, Embree %d.%d.%d; %zu rays per kind, %u instances%s",
+                          VKAS_VERSION_MAJOR, VKAS_VERSION_MINOR, VKAS_VERSION_PATCH, RTC_VERSION_MAJOR, RTC_VERSION_MINOR,
+                          RTC_VERSION_PATCH, o.rays, o.instances, o.quick ? ", --quick" : "");
+            bench.dump = std::make_unique<HitFileWriter>(o.dumpHits, writer);
+        }
+    } catch (const std::exception& e) {
+        std::fprintf(stderr, "vkas_bench_embree: %s\n", e.what());
+        return 2;
+    }
     std::printf("vkas_bench_embree: vkas %d.%d.%d against Embree %d.%d.%d; %u hardware threads; all-threads runs on %u; "
                 "%zu rays per kind; best of %d%s\n",
                 VKAS_VERSION_MAJOR, VKAS_VERSION_MINOR, VKAS_VERSION_PATCH, RTC_VERSION_MAJOR, RTC_VERSION_MINOR,
                 RTC_VERSION_PATCH, std::thread::hardware_concurrency(), o.threads, o.rays, o.reps, o.quick ? " (--quick)" : "");
+    if (bench.compare)
+        std::printf("comparing hits with %s (written by: %s)\n", o.compareHits.c_str(), bench.compare->writer().c_str());
     std::printf("builds on one thread (vkas: no deferral; Embree: threads=1); ratios are vkas / Embree (speed: Embree ms / vkas ms)\n");
-    Bench bench(o);
-    Json& j = bench.json;
     j.begin(nullptr, '{').field("vkas_version", std::to_string(VKAS_VERSION_MAJOR) + "." + std::to_string(VKAS_VERSION_MINOR));
     j.field("embree_version", std::to_string(RTC_VERSION_MAJOR) + "." + std::to_string(RTC_VERSION_MINOR) + "." +
                                   std::to_string(RTC_VERSION_PATCH));
@@ -420,11 +529,32 @@ int main(int argc, char** argv) {
         for (const std::string& m : o.meshes) bench.runScene(makeScene(m, true, o.dataDir, o.instances));
         j.end(']');
         if (!o.noScaling) bench.runScaling(makeScene(o.scalingScene, false, o.dataDir, o.instances), threadCounts);
+        if (bench.dump) {
+            bench.dump->finish();
+            std::printf("\nhits written to %s\n", o.dumpHits.c_str());
+        }
     } catch (const std::exception& e) {
         std::fprintf(stderr, "vkas_bench_embree: %s\n", e.what());
         return 1;
     }
-    std::printf("\ntargets (issue 7)%s:\n", o.quick ? " -- a --quick run is a smoke test, not a measurement" : "");
+    if (bench.compare) {
+        j.begin("hit_comparison", '{').field("file", o.compareHits).field("writer", bench.compare->writer());
+        j.field("different", double(bench.hitsDifferent)).field("not_compared_rays_differ", double(bench.hitsRefused));
+        j.begin("not_in_this_run", '[');
+        std::string absent;
+        for (const HitFileReader::Section& s : bench.compare->sections())
+            if (!s.used) {
+                absent += " " + s.scene + "/" + rayKindName(s.kind);
+                j.begin(nullptr, '{').field("scene", s.scene).field("rays", rayKindName(s.kind)).end('}');
+            }
+        j.end(']').end('}');
+        std::printf("\nhits against %s: %zu rays differ (not ties)%s", o.compareHits.c_str(), bench.hitsDifferent,
+                    bench.hitsRefused ? "" : "\n");
+        if (bench.hitsRefused) std::printf("; %zu scene/kind(s) NOT COMPARED: their rays differ\n", bench.hitsRefused);
+        if (!absent.empty()) std::printf("  in the file, not in this run:%s\n", absent.c_str());
+        if (bench.hitsDifferent || bench.hitsRefused) status = 1;
+    }
+    std::printf("\ntargets (issue 15)%s:\n", o.quick ? " -- a --quick run is a smoke test, not a measurement" : "");
     j.begin("targets", '[');
     size_t missed = 0;
     for (const Target& t : bench.targets) {
@@ -434,7 +564,7 @@ int main(int argc, char** argv) {
         if (met) std::snprintf(verdict, sizeof verdict, "met");
         else if (t.higherIsBetter) std::snprintf(verdict, sizeof verdict, "MISSED by %.0f%% (needs %.2fx more)", 100 * (1 - t.value / t.goal), t.goal / t.value);
         else std::snprintf(verdict, sizeof verdict, "MISSED by %.0f%%", 100 * (t.value / t.goal - 1));
-        std::printf("  %-14s %-68s %7.2f (goal %s%.2f)  %s\n", t.scene.c_str(), t.what.c_str(), t.value,
+        std::printf("  %-14s %-64s %7.2f (goal %s%.2f)  %s\n", t.scene.c_str(), t.what.c_str(), t.value,
                     t.higherIsBetter ? ">=" : "<=", t.goal, verdict);
         j.begin(nullptr, '{').field("scene", t.scene).field("target", t.what).field("value", t.value).field("goal", t.goal);
         j.field("higher_is_better", t.higherIsBetter).field("met", met).end('}');

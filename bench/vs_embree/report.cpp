@@ -179,7 +179,9 @@ Json& Json::end(char bracket) {
 Json& Json::field(const char* key, double v) {
     sep(key);
     char buf[64];
-    if (std::isfinite(v)) std::snprintf(buf, sizeof buf, "%.6g", v);
+    if (std::isfinite(v) && v == std::floor(v) && std::abs(v) < 9007199254740992.0)
+        std::snprintf(buf, sizeof buf, "%.0f", v);  // counts and byte sizes: every digit
+    else if (std::isfinite(v)) std::snprintf(buf, sizeof buf, "%.6g", v);
     else std::snprintf(buf, sizeof buf, "null");
     s_ += buf;
     return *this;

@@ -14,7 +14,7 @@ void check(VkResult r, const char* what) {
 Hit toHit(const VkasHit& h) {
     Hit r;
     if (h.type == VKAS_COMMITTED_INTERSECTION_NONE) return r;
-    r.inst = h.instanceId, r.prim = h.primitiveIndex, r.t = h.t, r.u = h.barycentrics[0], r.v = h.barycentrics[1];
+    r.inst = h.instanceId, r.prim = h.primitiveIndex, r.geom = h.geometryIndex, r.t = h.t, r.u = h.barycentrics[0], r.v = h.barycentrics[1];
     return r;
 }
 
@@ -139,6 +139,14 @@ uint64_t VkasEngine::compactedSize(const Structure& s) {
     return size;
 }
 
+uint64_t VkasEngine::structureSize(const Structure& s) {
+    uint64_t size = 0;
+    if (vkWriteAccelerationStructuresPropertiesKHR(dev_, 1, &s.as, VK_QUERY_TYPE_ACCELERATION_STRUCTURE_SIZE_KHR, sizeof size,
+                                                   &size, sizeof size) != VK_SUCCESS)
+        return 0;
+    return size;
+}
+
 VkasEngine::Build VkasEngine::buildBottom(const Mesh& mesh, VkBuildAccelerationStructureFlagsKHR flags, int reps,
                                           unsigned deferredThreads) {
     const VkAccelerationStructureGeometryKHR g = triangleGeometry(mesh, mesh.vertices.data());
@@ -158,6 +166,8 @@ VkasEngine::Build VkasEngine::buildBottom(const Mesh& mesh, VkBuildAccelerationS
     b.ms = 1e300;
     for (int r = 0; r < reps; ++r) b.ms = std::min(b.ms, run(info, {count, 0, 0, 0}, deferredThreads));
     b.compactedSize = compactedSize(b.s);
+    b.usedSize = structureSize(b.s);
+    b.sizeQuery = sizes.accelerationStructureSize;
     return b;
 }
 
@@ -181,6 +191,8 @@ VkasEngine::Build VkasEngine::buildTop(const std::vector<Transform>& xs, VkAccel
     b.ms = 1e300;
     for (int r = 0; r < reps; ++r) b.ms = std::min(b.ms, run(info, {count, 0, 0, 0}, 0));
     b.compactedSize = compactedSize(b.s);
+    b.usedSize = structureSize(b.s);
+    b.sizeQuery = sizes.accelerationStructureSize;
     return b;
 }
 

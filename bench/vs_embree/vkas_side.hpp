@@ -26,6 +26,8 @@ public:
         Structure s;
         double ms = 0;               // best of the repetitions
         uint64_t compactedSize = 0;  // vkWriteAccelerationStructuresPropertiesKHR, COMPACTED_SIZE
+        uint64_t usedSize = 0;       // the same, ACCELERATION_STRUCTURE_SIZE (the built structure's size; 0: not known)
+        uint64_t sizeQuery = 0;      // vkGetAccelerationStructureBuildSizesKHR's accelerationStructureSize (the buffer)
     };
 
     explicit VkasEngine(uint32_t workerThreadCount);  // 0: all cores (vkasTraceRays' worker threads)
@@ -63,6 +65,7 @@ private:
     double run(const VkAccelerationStructureBuildGeometryInfoKHR& info, const VkAccelerationStructureBuildRangeInfoKHR& range,
                unsigned deferredThreads);
     uint64_t compactedSize(const Structure& s);
+    uint64_t structureSize(const Structure& s);  // 0 when the query fails
 
     VkDevice dev_ = VK_NULL_HANDLE;
     std::vector<unsigned char> scratch_;
