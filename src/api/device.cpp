@@ -6,6 +6,7 @@
 #include "api/validate/validator.hpp"
 #include "engine/format/layout.hpp"
 
+#include <atomic>
 #include <cstdlib>
 #include <shared_mutex>
 #include <unordered_map>
@@ -20,6 +21,9 @@ namespace {
 // looked up here before they are dereferenced, so an unknown, destroyed or foreign handle is recognised without
 // touching the memory it points to.
 std::shared_mutex gRegistryMutex;
+// Counts the registry's changes (under the writer lock): a lookup cached at one value is still the registry's answer
+// while the count has not moved (ray_query_api.cpp caches its last top-level lookup per thread).
+std::atomic<uint64_t> gRegistryGeneration{0};
 std::unordered_map<const void*, Device*>& registry() {
     static auto* objects = new std::unordered_map<const void*, Device*>;  // never destroyed: used until exit
     return *objects;
@@ -29,12 +33,14 @@ std::unordered_map<const void*, Device*>& registry() {
 Device::Device(const VkasDeviceCreateInfo& info) : info_(info) {
     std::unique_lock lock(gRegistryMutex);
     registry().emplace(this, this);
+    gRegistryGeneration.fetch_add(1, std::memory_order_release);
 }
 
 Device::~Device() {
     magic_ = 0;
     std::unique_lock lock(gRegistryMutex);
     registry().erase(this);
+    gRegistryGeneration.fetch_add(1, std::memory_order_release);
 }
 
 Device* Device::fromHandle(VkDevice device) {
@@ -43,6 +49,8 @@ Device* Device::fromHandle(VkDevice device) {
     auto it = registry().find(device);
     return it != registry().end() && it->second == static_cast<const void*>(device) ? it->second : nullptr;
 }
+
+uint64_t Device::registryGeneration() { return gRegistryGeneration.load(std::memory_order_acquire); }
 
 Device* Device::ownerOf(const void* object) {
     if (!object) return nullptr;
@@ -66,6 +74,7 @@ bool Device::track(const void* object) noexcept {
     try {
         std::unique_lock lock(gRegistryMutex);
         registry()[object] = this;
+        gRegistryGeneration.fetch_add(1, std::memory_order_release);
     } catch (...) {
         return false;
     }
@@ -75,6 +84,7 @@ bool Device::track(const void* object) noexcept {
     } catch (...) {
         std::unique_lock lock(gRegistryMutex);
         registry().erase(object);
+        gRegistryGeneration.fetch_add(1, std::memory_order_release);
         return false;
     }
     return true;
@@ -84,6 +94,7 @@ void Device::untrack(const void* object) {
     {
         std::unique_lock lock(gRegistryMutex);
         registry().erase(object);
+        gRegistryGeneration.fetch_add(1, std::memory_order_release);
     }
     std::lock_guard lock(mutex_);
     objects_.erase(object);
@@ -113,6 +124,7 @@ size_t Device::releaseAll() {
     {
         std::unique_lock registryLock(gRegistryMutex);
         for (const void* o : objects_) registry().erase(o);
+        gRegistryGeneration.fetch_add(1, std::memory_order_release);
     }
     // One pass per type, in dependency order, erasing as it goes; allocates nothing (vkasDestroyDevice cannot
     // fail). Each object is freed the way it was allocated (destroyObject: through its VkAllocationCallbacks, if any).

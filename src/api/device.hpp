@@ -23,6 +23,8 @@ public:
     static Device* fromHandle(VkDevice device);
     // The device that owns the live object `object` (any type), or nullptr when no live object has that handle.
     static Device* ownerOf(const void* object);
+    // A number that changes whenever an object or device is registered or unregistered (see ownerOf).
+    static uint64_t registryGeneration();
     VkDevice handle() { return reinterpret_cast<VkDevice>(this); }
 
     bool validationEnabled() const { return !info_.disableValidation; }

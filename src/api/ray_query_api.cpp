@@ -23,10 +23,27 @@ struct QueryObject {
 };
 
 // The live acceleration structure `handle` names (looked up before it is dereferenced), or nullptr.
-const vkas::AccelerationStructure* liveStructure(VkAccelerationStructureKHR handle) {
+const vkas::AccelerationStructure* lookUpStructure(VkAccelerationStructureKHR handle) {
     if (!vkas::Device::ownerOf(handle)) return nullptr;
     auto* as = vkas::fromHandle<vkas::AccelerationStructure>(handle);
     return as->magic == vkas::ObjectMagic::AccelerationStructure ? as : nullptr;
+}
+
+// The live structure `handle` names, or null. A ray query is initialised once per ray, usually on the same top
+// level: the last answer is kept per thread and reused while the registry has not changed (no object created or
+// destroyed since), which saves the registry's lock and lookup on every ray.
+const vkas::AccelerationStructure* liveStructure(VkAccelerationStructureKHR handle) {
+    struct Last {
+        VkAccelerationStructureKHR handle = VK_NULL_HANDLE;
+        uint64_t generation = 0;
+        const vkas::AccelerationStructure* structure = nullptr;
+    };
+    thread_local Last last;
+    const uint64_t generation = vkas::Device::registryGeneration();
+    if (handle && handle == last.handle && generation == last.generation) return last.structure;
+    const vkas::AccelerationStructure* as = lookUpStructure(handle);
+    last = {handle, generation, as};
+    return as;
 }
 
 bool builtWithMotion(const vkas::AccelerationStructure* as) {

@@ -1,5 +1,7 @@
 #include "engine/build/structure_build.hpp"
 
+#include <immintrin.h>
+
 #include <algorithm>
 #include <cstring>
 
@@ -114,6 +116,24 @@ void writeTriangleLeaf(std::byte* records, const std::byte* temp, const PrimRef*
     const uint32_t n = leafCount(ref);
     const MutableTriangleLeaf leaf = triangleLeaf(records, first, n);
     const auto* gathered = reinterpret_cast<const TriangleRecord*>(temp);
+    if (n == 4) {  // the common leaf: three 4x4 transposes of the records' 12 words
+        __m128 a[4], b[4], c[4];
+        for (uint32_t l = 0; l < 4; ++l) {
+            const float* r = gathered[refs[first + l].index].v[0];
+            a[l] = _mm_loadu_ps(r), b[l] = _mm_loadu_ps(r + 4), c[l] = _mm_loadu_ps(r + 8);
+        }
+        _MM_TRANSPOSE4_PS(a[0], a[1], a[2], a[3]);  // v0x v0y v0z v1x
+        _MM_TRANSPOSE4_PS(b[0], b[1], b[2], b[3]);  // v1y v1z v2x v2y
+        _MM_TRANSPOSE4_PS(c[0], c[1], c[2], c[3]);  // v2z geometryIndex primitiveIndex flags
+        float* rows = leaf.row(0);
+        for (uint32_t r = 0; r < 4; ++r) _mm_storeu_ps(rows + 4 * r, a[r]), _mm_storeu_ps(rows + 16 + 4 * r, b[r]);
+        _mm_storeu_ps(rows + 32, c[0]);
+        _mm_storeu_si128(reinterpret_cast<__m128i*>(leaf.primitiveIndex()), _mm_castps_si128(c[2]));
+        const __m128i geometry = _mm_and_si128(_mm_castps_si128(c[1]), _mm_set1_epi32(int(kGeometryIndexMask)));
+        const __m128i flags = _mm_slli_epi32(_mm_castps_si128(c[3]), int(kGeometryIndexBits));
+        _mm_storeu_si128(reinterpret_cast<__m128i*>(leaf.geometryAndFlags()), _mm_or_si128(geometry, flags));
+        return;
+    }
     for (uint32_t lane = 0; lane < n; ++lane) {
         TriangleRecord t;
         std::memcpy(&t, &gathered[refs[first + lane].index], sizeof t);

@@ -1,12 +1,14 @@
 #include "engine/trace/ray_query.hpp"
 
 #include <cmath>
+#include <cstdlib>
 #include <cstring>
 
 #include "engine/format/motion.hpp"
 #include "engine/trace/aabb_test.hpp"
 #include "engine/trace/hit_rules.hpp"
 #include "engine/trace/lss_test.hpp"
+#include "engine/trace/node_test_avx2.hpp"
 #include "engine/trace/node_test_sse.hpp"
 #include "engine/trace/sphere_test.hpp"
 #include "engine/trace/traversal_steps.hpp"
@@ -28,17 +30,48 @@ void resetHit(QueryHit& h, float tMax) {
 
 void push(RayQueryState& q, ChildRef ref, float dist) { pushChild(q.stackRef, q.stackDist, q.sp, ref, dist); }
 
-// Tests the children of one node and pushes the hit ones, farthest first so the nearest is popped next.
-void visitNode(RayQueryState& q, const Node* nodes, uint32_t index, const ShearedRay& r) {
-    const Node& node = nodes[index];
-    float entry[kNodeWidth];
-    float dist[kNodeWidth];
-    ChildRef ref[kNodeWidth];
-    const uint32_t hits = orderHitChildren(node, childEntryDistances(node, r, q.tMin, q.tMax, entry), entry, ref, dist);
-    for (uint32_t k = 0; k < hits; ++k) {
-        if (isInternal(ref[k])) prefetchNode(nodes + nodeIndex(ref[k]));
-        push(q, ref[k], dist[k]);
-    }
+using DescendFn = ChildRef (*)(RayQueryState&, const Node*, ChildRef, const ShearedRay&);
+
+// The walk down from a popped node (ray_query_descent.hpp), once per instruction set as the batch kernel is built.
+namespace baseline {
+inline uint32_t nodeTest(const Node& n, const ShearedRay& r, float tMin, float tMax, float* out) {
+    return childEntryDistances(n, r, tMin, tMax, out);
+}
+#include "engine/trace/ray_query_descent.hpp"
+}  // namespace baseline
+
+#if VKAS_NODE_TEST_AVX2
+#if defined(__clang__)
+#pragma clang attribute push(__attribute__((target("avx2"))), apply_to = function)
+#else
+#pragma GCC push_options
+#pragma GCC target("avx2")
+#endif
+namespace avx2 {
+inline uint32_t nodeTest(const Node& n, const ShearedRay& r, float tMin, float tMax, float* out) {
+    return childEntryDistancesAvx2(n, r, tMin, tMax, out);
+}
+#include "engine/trace/ray_query_descent.hpp"
+}  // namespace avx2
+#if defined(__clang__)
+#pragma clang attribute pop
+#else
+#pragma GCC pop_options
+#endif
+#endif
+
+// The AVX2 node test where the CPU has it, unless VKAS_TRACE_KERNEL=sse2 asks for the baseline (as for the batch).
+DescendFn chooseDescend() {
+#if VKAS_NODE_TEST_AVX2
+    const char* forced = std::getenv("VKAS_TRACE_KERNEL");
+    if (!(forced && std::strcmp(forced, "sse2") == 0) && __builtin_cpu_supports("avx2")) return avx2::descend;
+#endif
+    return baseline::descend;
+}
+
+ChildRef descend(RayQueryState& q, const Node* nodes, ChildRef ref, const ShearedRay& r) {
+    static const DescendFn fn = chooseDescend();
+    return fn(q, nodes, ref, r);
 }
 
 // Enters `inst` with the world-to-object transform `worldToObject` (the record's own, or [NV-motion] the one
@@ -314,12 +347,13 @@ bool queryProceed(RayQueryState& q) {
             }
         }
         --q.sp;
-        const ChildRef ref = q.stackRef[q.sp];
+        ChildRef ref = q.stackRef[q.sp];
         if (q.stackDist[q.sp] > q.tMax * kFarSlack) continue;  // behind the committed hit
         if (isInternal(ref)) {
             const std::byte* base = q.inBottomLevel ? q.bottomLevel : q.topLevel;
-            visitNode(q, nodes(base), nodeIndex(ref), q.inBottomLevel ? q.objectRay : q.worldRay);
-        } else if (isLeaf(ref)) {
+            ref = descend(q, nodes(base), ref, q.inBottomLevel ? q.objectRay : q.worldRay);
+        }
+        if (isLeaf(ref)) {
             if (q.inBottomLevel) {
                 q.bottomLeafFirst = q.bottomLeafNext = leafFirst(ref);
                 q.bottomLeafEnd = leafFirst(ref) + leafCount(ref);
