@@ -1514,9 +1514,10 @@ class format_v1_blob : public OperationsTest {
 };
 
 TEST_F(format_v1_blob, DISABLED_generate) {
-    // Run with --gtest_also_run_disabled_tests and VKAS_WRITE_TEST_DATA=<dir> to write the files of the layout this
-    // vkas writes (layout 2: serialized_layout2_*.bin; the format_v1_*.bin files of layout 1 were written by this
-    // test before layout 2 existed, and are kept as they are).
+    // Run with --gtest_also_run_disabled_tests and VKAS_WRITE_TEST_DATA=<dir> to write the files of the layout and
+    // block format this vkas writes (layout 2, format 2: serialized_format2_*.bin). Older files are kept as they are:
+    // format_v1_*.bin (layout 1, format 1) and serialized_layout2_*.bin (layout 2, format 1) were written by this
+    // test before layout 2 and format 2 existed.
     const char* dir = std::getenv("VKAS_WRITE_TEST_DATA");
     ASSERT_NE(dir, nullptr) << "set VKAS_WRITE_TEST_DATA to the output directory";
     keep.push_back(makeGeometry(grid(6, 6), VK_INDEX_TYPE_UINT32, VK_GEOMETRY_OPAQUE_BIT_KHR));
@@ -1532,11 +1533,11 @@ TEST_F(format_v1_blob, DISABLED_generate) {
     AccelStruct* tlas = buildTlas(instances);
     const Blob bb = serialize(blas), tb = serialize(tlas);
     ASSERT_TRUE(bb.layout2());
-    std::ofstream(std::string(dir) + "/serialized_layout2_blas.bin", std::ios::binary)
+    std::ofstream(std::string(dir) + "/serialized_format2_blas.bin", std::ios::binary)
         .write(reinterpret_cast<const char*>(bb.data), std::streamsize(bb.size));
     Blob t = tb;
     for (size_t k = 0; k < t.handleCount(); ++k) t.setHandle(k, 0);  // addresses mean nothing in a file
-    std::ofstream(std::string(dir) + "/serialized_layout2_tlas.bin", std::ios::binary)
+    std::ofstream(std::string(dir) + "/serialized_format2_tlas.bin", std::ios::binary)
         .write(reinterpret_cast<const char*>(t.data), std::streamsize(t.size));
     std::ofstream expected(std::string(dir) + "/format_v1_expected.txt");
     for (const auto& r : fixedRays()) expected << describeHit(traceClosest(tlas, r)) << "\n";
@@ -1558,6 +1559,12 @@ void format_v1_blob::loadAndTrace(const std::string& blasFile, const std::string
     }
     AccelStruct* blas = createAccelStruct(VK_ACCELERATION_STRUCTURE_TYPE_BOTTOM_LEVEL_KHR, bb.deserializedSize(), {});
     ASSERT_EQ(deserializeInto(bb, blas), VK_SUCCESS);
+    // Whatever format the blob holds, the loaded structure is format 2 (docs/FORMAT.md): a format-1 block of the 72
+    // grid triangles shrinks from 48 to 44 bytes a triangle plus the 4-byte tail.
+    EXPECT_EQ(load32(blas->data() + 4), 2u) << "block format version";
+    const bool format1 = std::memcmp(bb.data + 16, "VKAS-AS-FORMAT-1", 16) == 0;
+    EXPECT_EQ(usedSize(blas), format1 ? bb.deserializedSize() - 4 * 72 + 4 : bb.deserializedSize());
+    EXPECT_EQ(serialize(blas).deserializedSize(), usedSize(blas));
     ASSERT_EQ(tb.handleCount(), kInstances);
     for (size_t k = 0; k < kInstances; ++k)
         tb.setHandle(k, entries == Entries::Handles ? blas->reference() : address(blas));
@@ -1593,7 +1600,11 @@ TEST_F(format_v1_blob, loads_and_traces) { loadAndTrace("format_v1_blas.bin", "f
 TEST_F(format_v1_blob, loads_and_traces_with_device_addresses) {
     loadAndTrace("format_v1_blas.bin", "format_v1_tlas.bin", Entries::Addresses);
 }
-// Layout 2 (device addresses, integrity hash).
+// Format 2 (serialized layout 2): the blobs the current vkas writes.
+TEST_F(format_v1_blob, format2_loads_and_traces) {
+    loadAndTrace("serialized_format2_blas.bin", "serialized_format2_tlas.bin", Entries::Addresses);
+}
+// Layout 2 (device addresses, integrity hash), block format 1.
 TEST_F(format_v1_blob, layout2_loads_and_traces) {
     loadAndTrace("serialized_layout2_blas.bin", "serialized_layout2_tlas.bin", Entries::Addresses);
 }
