@@ -28,7 +28,9 @@ constexpr uint64_t kMaxExtent = 1u << 16;
 // The driver UUIDs of serialized layouts 1 and 2 (docs/FORMAT.md), written out here as the format document gives them.
 constexpr uint8_t kDriverUuid[16] = {'V', 'K', 'A', 'S', '-', 'D', 'R', 'I', 'V', 'E', 'R', '-', 'F', 'M', 'T', '1'};
 constexpr uint8_t kDriverUuid2[16] = {'V', 'K', 'A', 'S', '-', 'S', 'E', 'R', 'I', 'A', 'L', 'I', 'Z', 'E', 'D', '2'};
+// The compatibility UUIDs of block formats 1 and 2: layout 1 carries format 1 only, layout 2 either.
 constexpr uint8_t kCompatUuid[16] = {'V', 'K', 'A', 'S', '-', 'A', 'S', '-', 'F', 'O', 'R', 'M', 'A', 'T', '-', '1'};
+constexpr uint8_t kCompatUuid2[16] = {'V', 'K', 'A', 'S', '-', 'A', 'S', '-', 'F', 'O', 'R', 'M', 'A', 'T', '-', '2'};
 
 uint64_t load64(const uint8_t* p) {
     uint64_t v;
@@ -113,13 +115,19 @@ VkResult deserialize(Device& d, const Structure& dst, const void* blob, bool def
 }
 
 // Everything done with a structure the command loaded: traces, a clone, serialization and a second load.
-void exercise(Device& d, Structure& dst, uint64_t deserializedSize, uint64_t serializedSize, const uint8_t* seed,
-              size_t seedSize) {
+void exercise(Device& d, Structure& dst, uint64_t deserializedSize, uint64_t serializedSize, bool format1,
+              const uint8_t* seed, size_t seedSize) {
     const uint8_t* block = dst.block();
-    FZ_CHECK(d.usedSize(dst) == deserializedSize, "usedSize %llu after loading %llu bytes",
-             (unsigned long long)d.usedSize(dst), (unsigned long long)deserializedSize);
-    FZ_CHECK(allBytes(block + deserializedSize, dst.buffer.size - dst.offset - deserializedSize, 0xAA),
-             "the load wrote past the deserialized size");
+    // A block of format 2 loads as it is; one of format 1 is rewritten as format 2, which only shrinks it
+    // (docs/FORMAT.md, "Format 1"). Either way the loaded structure is format 2 and nothing past it is written.
+    const uint64_t loaded = d.usedSize(dst);
+    FZ_CHECK(format1 ? loaded <= deserializedSize : loaded == deserializedSize, "usedSize %llu after loading %llu bytes%s",
+             (unsigned long long)loaded, (unsigned long long)deserializedSize, format1 ? " of format 1" : "");
+    FZ_CHECK(load32(block + 4) == 2, "a loaded structure of format version %u", load32(block + 4));
+    FZ_CHECK(allBytes(block + loaded, dst.buffer.size - dst.offset - loaded, 0xAA),
+             "the load wrote past the loaded structure");
+    serializedSize -= deserializedSize - loaded;  // vkas serializes the loaded (format-2) block
+    deserializedSize = loaded;
     const uint32_t type = load32(block + 8);
     float bounds[6];
     std::memcpy(bounds, block + 32, sizeof bounds);
@@ -236,7 +244,9 @@ VkResult runOn(Device& d, Device& other, const uint8_t* data, size_t size, bool 
         const size_t seedOff = std::min<size_t>(size, 56);
         // vkas writes serialized layout 2: a loaded layout-1 blob serializes 8 bytes (the integrity hash) larger.
         const bool layout1 = std::memcmp(blob.data, vkas::serial::kDriverUuidV1, 16) == 0;
-        exercise(d, dst, load64(blob.data + 40), load64(blob.data + 32) + (layout1 ? 8 : 0), data + seedOff,
+        // The compatibility UUID names the block's format version (docs/FORMAT.md).
+        const bool format1 = std::memcmp(blob.data + 16, vkas::serial::kCompatibilityUuidV1, 16) == 0;
+        exercise(d, dst, load64(blob.data + 40), load64(blob.data + 32) + (layout1 ? 8 : 0), format1, data + seedOff,
                  std::min<size_t>(size - seedOff, 128));
     }
     d.destroyStructure(dst);
@@ -249,9 +259,10 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     if (size > kMaxExtent) return 0;
     Device& on = fz::validatingDevice();
     Device& off = fz::plainDevice();
-    const bool compatible =
-        size >= 32 && (std::memcmp(data, kDriverUuid, 16) == 0 || std::memcmp(data, kDriverUuid2, 16) == 0) &&
-        std::memcmp(data + 16, kCompatUuid, 16) == 0;
+    const bool format1 = size >= 32 && std::memcmp(data + 16, kCompatUuid, 16) == 0;
+    const bool format2 = size >= 32 && std::memcmp(data + 16, kCompatUuid2, 16) == 0;
+    const bool compatible = (size >= 32 && std::memcmp(data, kDriverUuid, 16) == 0 && format1) ||
+                            (size >= 32 && std::memcmp(data, kDriverUuid2, 16) == 0 && (format1 || format2));
     const VkResult rOn = runOn(on, off, data, size, compatible);
     const VkResult rOff = runOn(off, on, data, size, compatible);
     // Validation adds checks of the handles only: what it accepts loads without it too.

@@ -107,10 +107,8 @@ TEST_F(FormatCheck, every_kind_of_damage_is_refused) {
         const format::Header hh = headerCopy();
         const auto* nodes = reinterpret_cast<const format::Node*>(block.data() + hh.nodeOffset);
         format::ChildRef leaf = format::kEmptyRef;
-        for (const auto c : nodes[0].child)
-            if (format::isLeaf(c)) leaf = c;
-        if (leaf == format::kEmptyRef)  // node 0 has only internal children: take a leaf of its first child
-            for (const auto c : nodes[format::nodeIndex(nodes[0].child[0])].child)
+        for (uint32_t k = 0; k < hh.nodeCount && leaf == format::kEmptyRef; ++k)
+            for (const auto c : nodes[k].child)
                 if (format::isLeaf(c)) leaf = c;
         ASSERT_NE(leaf, format::kEmptyRef);
         std::vector<std::byte> copy = block;

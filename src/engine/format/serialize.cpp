@@ -33,7 +33,9 @@ uint32_t blockVersionOf(const uint8_t* versionData) {
 Layout layoutOf(const uint8_t* versionData) {
     if (blockVersionOf(versionData) == 0) return Layout::None;
     if (std::memcmp(versionData + kDriverUuidOffset, kDriverUuidV2, kUuidSize) == 0) return Layout::V2;
-    if (std::memcmp(versionData + kDriverUuidOffset, kDriverUuidV1, kUuidSize) == 0) return Layout::V1;
+    // Layout 1 was written only with block format 1.
+    if (std::memcmp(versionData + kDriverUuidOffset, kDriverUuidV1, kUuidSize) == 0)
+        return blockVersionOf(versionData) == format::kFormat1 ? Layout::V1 : Layout::None;
     return Layout::None;
 }
 
