@@ -120,6 +120,19 @@ TEST_F(FormatCheck, every_kind_of_damage_is_refused) {
         lanes = format::triangleLeaf(copy.data() + hh.recordOffset, format::leafFirst(leaf), format::leafCount(leaf));
         lanes.primitiveIndex()[0] = 500;
         EXPECT_EQ(format::checkBlock(copy.data(), copy.size()).status, CheckStatus::Corrupt) << "a lane's primitive";
+        // Two leaves over the same records (their rows would overlap): refused even when the counts still add up.
+        copy = block;
+        auto* mutableNodes = reinterpret_cast<format::Node*>(copy.data() + hh.nodeOffset);
+        format::ChildRef* a = nullptr;
+        format::ChildRef* b = nullptr;
+        for (uint32_t k = 0; k < hh.nodeCount && !b; ++k)
+            for (auto& c : mutableNodes[k].child)
+                if (format::isLeaf(c) && format::leafCount(c) >= 2) (a ? b : a) = &c;
+        ASSERT_NE(b, nullptr);
+        const uint32_t na = format::leafCount(*a), nb = format::leafCount(*b);
+        *a = format::makeLeafRef(format::leafFirst(*b), na);  // a now starts where b does
+        *b = format::makeLeafRef(format::leafFirst(*b), nb);
+        EXPECT_EQ(format::checkBlock(copy.data(), copy.size()).status, CheckStatus::Corrupt) << "overlapping leaves";
     }
     // Every truncation: refused, and nothing read past the end (the sanitizer build would see it).
     for (uint64_t size = 0; size < block.size(); size += 1 + size / 8) {

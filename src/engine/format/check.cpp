@@ -41,6 +41,7 @@ struct TreeWalk {
     uint64_t nodesSeen = 0;
     uint64_t recordsCovered = 0;
     std::vector<ChildRef>* leaves = nullptr;  // format-2 triangles: every leaf, for the lane checks
+    std::vector<uint64_t> covered = std::vector<uint64_t>((recordCount + 63) / 64, 0);  // records named by a leaf
 
     const char* visit(ChildRef ref, uint32_t depth) {
         const uint64_t kind = ref >> kKindShift;
@@ -62,6 +63,12 @@ struct TreeWalk {
             const uint64_t first = leafFirst(ref);
             if (count == 0) return "a leaf holds no record";
             if (first > recordCount || count > recordCount - first) return "a leaf names records outside the record array";
+            // Every record in exactly one leaf (what every build writes): overlapping triangle leaves would lay their
+            // rows over each other (layout.hpp, TriangleLeaf), and a refit would write a record twice.
+            for (uint64_t r = first; r < first + count; ++r) {
+                if (covered[r / 64] & (1ull << (r % 64))) return "two leaves name the same record";
+                covered[r / 64] |= 1ull << (r % 64);
+            }
             recordsCovered += count;
             if (leaves) leaves->push_back(ref);
             return nullptr;
