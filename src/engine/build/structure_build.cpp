@@ -134,14 +134,7 @@ void writeTriangleLeaf(std::byte* records, const std::byte* temp, const PrimRef*
         _mm_storeu_si128(reinterpret_cast<__m128i*>(leaf.geometryAndFlags()), _mm_or_si128(geometry, flags));
         return;
     }
-    for (uint32_t lane = 0; lane < n; ++lane) {
-        TriangleRecord t;
-        std::memcpy(&t, &gathered[refs[first + lane].index], sizeof t);
-        for (uint32_t k = 0; k < 3; ++k)
-            for (uint32_t a = 0; a < 3; ++a) leaf.row(3 * k + a)[lane] = t.v[k][a];
-        leaf.primitiveIndex()[lane] = t.primitiveIndex;
-        leaf.geometryAndFlags()[lane] = packGeometryAndFlags(t.geometryIndex, t.flags);
-    }
+    for (uint32_t lane = 0; lane < n; ++lane) leaf.setLane(lane, gathered[refs[first + lane].index]);
 }
 
 // Every leaf of the tree, found through the node slots that name it (or the root), on several threads for large trees.

@@ -106,8 +106,8 @@ CheckResult checkBlock(const std::byte* block, uint64_t size) {
         uint64_t(h.nodeCount) * sizeof(Node) > h.recordOffset - h.nodeOffset)
         return corrupt("the node array does not fit before the records");
     const bool triangleLeaves =
-        !format1 && storesTriangleLeaves(structureTypeOf(h.type), h.primitiveType, isMotionFlag(h.buildFlags));
-    const uint64_t stride = format1 && !topLevel && !isMotionFlag(h.buildFlags)
+        !format1 && storesTriangleLeaves(structureTypeOf(h.type), h.primitiveType, motion::isMotionBuild(h.buildFlags));
+    const uint64_t stride = format1 && !topLevel && !motion::isMotionBuild(h.buildFlags)
                                 ? sizeof(TriangleRecord)  // every format-1 bottom-level record
                                 : recordSize(h.type, h.primitiveType, h.buildFlags);
     const uint64_t tail = format1 ? 0 : recordTailSize(h.type, h.primitiveType, h.buildFlags, h.recordCount);

@@ -18,7 +18,7 @@ Header loadHeader(const std::byte* block) {
 
 // Whether a format-1 block has triangle records that format 2 stores as leaves.
 bool changesShape(const Header& h) {
-    return h.version == kFormat1 && storesTriangleLeaves(structureTypeOf(h.type), h.primitiveType, isMotionFlag(h.buildFlags));
+    return h.version == kFormat1 && storesTriangleLeaves(structureTypeOf(h.type), h.primitiveType, motion::isMotionBuild(h.buildFlags));
 }
 
 // Format-1 leaf `ref` (48-byte records at src) written as a format-2 triangle leaf at dst.
@@ -28,11 +28,9 @@ void convertLeaf(const std::byte* src, std::byte* dst, ChildRef ref) {
     for (uint32_t lane = 0; lane < leaf.n; ++lane) {
         TriangleRecord t;
         std::memcpy(&t, src + (first + lane) * sizeof(TriangleRecord), sizeof t);
-        for (uint32_t k = 0; k < 3; ++k)
-            for (uint32_t a = 0; a < 3; ++a) leaf.row(3 * k + a)[lane] = t.v[k][a];
-        leaf.primitiveIndex()[lane] = t.primitiveIndex;
         // Format 1 flags use bits 0-2 (checkBlock bounds geometryIndex by the geometry count, at most 2^24).
-        leaf.geometryAndFlags()[lane] = packGeometryAndFlags(t.geometryIndex, t.flags & 0xFFu);
+        t.flags &= 0xFFu;
+        leaf.setLane(lane, t);
     }
 }
 

@@ -141,6 +141,16 @@ struct TriangleLeafView {
         for (uint32_t k = 0; k < 3; ++k)
             for (uint32_t a = 0; a < 3; ++a) v[k][a] = row(3 * k + a)[lane];
     }
+    // Writers (mutable leaves): a lane's positions, or the whole lane from a gathered (or format-1) record.
+    void setPositions(uint32_t lane, const float (*v)[3]) const {
+        for (uint32_t k = 0; k < 3; ++k)
+            for (uint32_t a = 0; a < 3; ++a) row(3 * k + a)[lane] = v[k][a];
+    }
+    void setLane(uint32_t lane, const TriangleRecord& t) const {
+        setPositions(lane, t.v);
+        primitiveIndex()[lane] = t.primitiveIndex;
+        geometryAndFlags()[lane] = packGeometryAndFlags(t.geometryIndex, t.flags);
+    }
 };
 using ConstTriangleLeaf = TriangleLeafView<const std::byte>;
 using MutableTriangleLeaf = TriangleLeafView<std::byte>;

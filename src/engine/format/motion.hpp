@@ -27,7 +27,7 @@ constexpr uint32_t kStatic = VK_ACCELERATION_STRUCTURE_MOTION_INSTANCE_TYPE_STAT
 constexpr uint32_t kMatrix = VK_ACCELERATION_STRUCTURE_MOTION_INSTANCE_TYPE_MATRIX_MOTION_NV;
 constexpr uint32_t kSrt = VK_ACCELERATION_STRUCTURE_MOTION_INSTANCE_TYPE_SRT_MOTION_NV;
 
-inline bool isMotionBuild(VkBuildAccelerationStructureFlagsKHR flags) {
+constexpr bool isMotionBuild(VkBuildAccelerationStructureFlagsKHR flags) {
     return (flags & VK_BUILD_ACCELERATION_STRUCTURE_MOTION_BIT_NV) != 0;
 }
 

@@ -6,6 +6,7 @@
 #include <cstdint>
 
 #include "engine/format/layout.hpp"
+#include "engine/format/motion.hpp"
 
 namespace vkas {
 
@@ -29,22 +30,21 @@ constexpr uint64_t recordSize(format::StructureType type, uint32_t primitiveType
     if (motion && primitiveType == 0) return sizeof(format::MotionTriangleRecord);
     return storesTriangleLeaves(type, primitiveType, motion) ? format::kTriangleBytes : sizeof(format::TriangleRecord);
 }
-// The same, from the header fields of a block of format 2: a motion build (VK_BUILD_ACCELERATION_STRUCTURE_MOTION_BIT_NV,
-// 0x20) stores motion records at the top level and for triangles (primitive type 0) only.
-constexpr bool isMotionFlag(uint32_t buildFlags) { return (buildFlags & 0x20u) != 0; }
+// The same, from the header fields of a block of format 2: a motion build (motion::isMotionBuild) stores motion
+// records at the top level and for triangles (primitive type 0) only.
 constexpr format::StructureType structureTypeOf(uint32_t type) {
     return type == uint32_t(format::StructureType::TopLevel) ? format::StructureType::TopLevel
                                                              : format::StructureType::BottomLevel;
 }
 constexpr uint64_t recordSize(uint32_t type, uint32_t primitiveType, uint32_t buildFlags) {
-    return recordSize(structureTypeOf(type), primitiveType, isMotionFlag(buildFlags));
+    return recordSize(structureTypeOf(type), primitiveType, motion::isMotionBuild(buildFlags));
 }
 // Bytes after the last record: the zero tail of a triangle array (layout.hpp, kTriangleTailBytes), else none.
 constexpr uint64_t recordTailSize(format::StructureType type, uint32_t primitiveType, bool motion, uint64_t recordCount) {
     return recordCount != 0 && storesTriangleLeaves(type, primitiveType, motion) ? format::kTriangleTailBytes : 0;
 }
 constexpr uint64_t recordTailSize(uint32_t type, uint32_t primitiveType, uint32_t buildFlags, uint64_t recordCount) {
-    return recordTailSize(structureTypeOf(type), primitiveType, isMotionFlag(buildFlags), recordCount);
+    return recordTailSize(structureTypeOf(type), primitiveType, motion::isMotionBuild(buildFlags), recordCount);
 }
 
 uint32_t maxLeafSize(format::StructureType type);

@@ -25,12 +25,8 @@ static inline void testTriangleLeaf(Walk& w, const std::byte* records, format::C
         edgesOfFour(leaf, lane0, leaf.n - lane0 < 4 ? leaf.n - lane0 : 4, w.objectRay, e);
         for (uint32_t lanes = e.covered | e.undecided; lanes != 0; lanes &= lanes - 1) {
             const uint32_t lane = uint32_t(__builtin_ctz(lanes));
-            const uint32_t flags = leaf.flags(lane0 + lane);
-            if (flags & format::kTriangleDegenerate) continue;
             TriangleCandidate c;
-            if (!laneIntersection(leaf, lane0, lane, e, w.objectRay, c.hit) ||
-                !acceptTriangleHit(w.tMin, w.tMax, w.flags, instanceFlags, flags, c))
-                continue;
+            if (!leafLaneCandidate(leaf, lane0, lane, e, w.objectRay, w.tMin, w.tMax, w.flags, instanceFlags, c)) continue;
             float v[3][3];
             leaf.positions(lane0 + lane, v);
             setTriangleHit(*w.committed, kCommittedTriangle, c, leaf.geometryIndex(lane0 + lane),

@@ -7,6 +7,7 @@
 
 #include "engine/format/layout.hpp"
 #include "engine/trace/ray.hpp"
+#include "engine/trace/triangle_leaf_test.hpp"
 #include "engine/trace/triangle_test.hpp"
 
 namespace vkas {
@@ -115,6 +116,17 @@ inline bool triangleCandidate(const ShearedRay& r, float tMin, float tMax, uint3
     if (recordFlags & format::kTriangleDegenerate) return false;
     if (!intersectTriangle(r, v[0], v[1], v[2], out.hit)) return false;
     return acceptTriangleHit(tMin, tMax, rayFlags, instanceFlags, recordFlags, out);
+}
+
+// The same decision for lane `lane` of the four from `lane0` of a format-2 leaf that edgesOfFour left (its edge
+// functions already computed): the ray query and both batch kernels take the lanes of a leaf through it, in order.
+inline bool leafLaneCandidate(const format::ConstTriangleLeaf& leaf, uint32_t lane0, uint32_t lane,
+                              const FourLaneEdges& e, const ShearedRay& r, float tMin, float tMax, uint32_t rayFlags,
+                              uint32_t instanceFlags, TriangleCandidate& out) {
+    const uint32_t flags = leaf.flags(lane0 + lane);
+    if (flags & format::kTriangleDegenerate) return false;
+    if (!laneIntersection(leaf, lane0, lane, e, r, out.hit)) return false;
+    return acceptTriangleHit(tMin, tMax, rayFlags, instanceFlags, flags, out);
 }
 
 // Starts hit record `h` of `type` at t on `instance`, seen along the object-space ray `r`: no primitive yet, no

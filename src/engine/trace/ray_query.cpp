@@ -191,11 +191,9 @@ bool visitTriangleLeaf(RayQueryState& q) {
         const uint32_t lane = uint32_t(__builtin_ctz(q.leafLanes));
         q.leafLanes &= q.leafLanes - 1;
         const uint32_t at = q.leafLane0 + lane;
-        const uint32_t flags = leaf.flags(at);
-        if (flags & kTriangleDegenerate) continue;
         TriangleCandidate c;
-        if (!laneIntersection(leaf, q.leafLane0, lane, q.leafEdges, q.objectRay, c.hit) ||
-            !acceptTriangleHit(q.tMin, q.tMax, q.flags, instanceFlags, flags, c))
+        if (!leafLaneCandidate(leaf, q.leafLane0, lane, q.leafEdges, q.objectRay, q.tMin, q.tMax, q.flags, instanceFlags,
+                               c))
             continue;
         float v[3][3];
         leaf.positions(at, v);

@@ -154,8 +154,7 @@ struct LaneRef {
     uint32_t flags() const { return src.flags(lane); }
     // Writes the lane's positions, its indices (unless src and dst are one) and its flags.
     void write(const float (*v)[3], uint32_t flags) const {
-        for (uint32_t k = 0; k < 3; ++k)
-            for (uint32_t a = 0; a < 3; ++a) dst.row(3 * k + a)[lane] = v[k][a];
+        dst.setPositions(lane, v);
         if (static_cast<const void*>(src.base) != static_cast<const void*>(dst.base))
             dst.primitiveIndex()[lane] = primitive();
         dst.geometryAndFlags()[lane] = packGeometryAndFlags(geometry(), flags);
