@@ -1,4 +1,5 @@
-// vkasTraceRays: many rays, each traced as a ray query run to completion, spread over the worker threads.
+// vkasTraceRays: many rays, each traced as a ray query run to completion would trace it, spread over the worker
+// threads.
 #include <cstdio>
 #include <cstring>
 #include <memory>
@@ -9,6 +10,7 @@
 #include "api/validate/ray.hpp"
 #include "api/validate/validator.hpp"
 #include "engine/trace/batch_kernel.hpp"
+#include "engine/trace/packet_gather.hpp"
 #include "engine/trace/ray_query.hpp"
 
 namespace {
@@ -121,30 +123,57 @@ VkResult traceBatch(VkDevice device, VkAccelerationStructureKHR topLevel, VkasTr
     const uint32_t flags = rayFlags | (intersect ? 0u : VKAS_RAY_FLAG_SKIP_AABBS) |
                            (mode == VKAS_TRACE_MODE_ANY_HIT ? VKAS_RAY_FLAG_TERMINATE_ON_FIRST_HIT : 0u);
     const uint64_t tasks = (uint64_t(rayCount) + kRaysPerTask - 1) / kRaysPerTask;
+    const vkas::PacketPolicy packets = intersect ? vkas::PacketPolicy::Off : vkas::packetPolicy();
+    const float originTolerance =
+        block ? vkas::packetOriginTolerance(vkas::format::header(block)->bounds) : 0.0f;
     dev->workers().parallelFor(tasks, [&](uint64_t task) {
-        // Without an intersection callback the batch kernel traces the rays; a ray it does not cover (motion,
-        // spheres, LSS) and every ray of vkasTraceRaysProcedural run as ray queries. Both give the same hits.
-        std::unique_ptr<vkas::KernelScratch> scratch;  // 11 KiB each: kept off small worker stacks
+        // Without an intersection callback the batch kernel traces the rays, coherent closest-hit rays as packets;
+        // a ray it does not cover (motion, spheres, LSS) and every ray of vkasTraceRaysProcedural run as ray
+        // queries. All give the same hits.
+        std::unique_ptr<vkas::PacketScratch> scratch;  // 11 KiB and more: kept off small worker stacks
         std::unique_ptr<vkas::RayQueryState> q;
-        if (!intersect) scratch = std::make_unique<vkas::KernelScratch>();
-        uint64_t end = std::min<uint64_t>(rayCount, (task + 1) * kRaysPerTask);
-        for (uint64_t i = task * kRaysPerTask; i < end; ++i) {
-            const VkasRay& r = pRays[i];
-            if (scratch) {
-                const vkas::KernelRay ray{{r.origin[0], r.origin[1], r.origin[2]},
-                                          {r.direction[0], r.direction[1], r.direction[2]},
-                                          r.tMin, r.tMax, flags, cullMask};
-                vkas::QueryHit hit;
-                if (vkas::traceKernel(block, vkas::resolveAccelerationStructure, ray, *scratch, hit)) {
-                    writeHit(hit, pHits[i]);
-                    continue;
-                }
+        if (!intersect) scratch = std::make_unique_for_overwrite<vkas::PacketScratch>();
+        const uint64_t first = task * kRaysPerTask;
+        const uint32_t n = uint32_t(std::min<uint64_t>(rayCount, first + kRaysPerTask) - first);
+        vkas::KernelRay rays[kRaysPerTask];
+        for (uint32_t k = 0; k < n; ++k) {
+            const VkasRay& r = pRays[first + k];
+            rays[k] = {{r.origin[0], r.origin[1], r.origin[2]}, {r.direction[0], r.direction[1], r.direction[2]},
+                       r.tMin, r.tMax, flags, cullMask};
+        }
+        auto traceAlone = [&](uint32_t k) {
+            const uint64_t i = first + k;
+            vkas::QueryHit hit;
+            if (scratch && vkas::traceKernel(block, vkas::resolveAccelerationStructure, rays[k], scratch->single, hit)) {
+                writeHit(hit, pHits[i]);
+                return;
             }
+            const VkasRay& r = pRays[i];
             if (!q) q = std::make_unique<vkas::RayQueryState>();
             vkas::queryInitialize(*q, block, vkas::resolveAccelerationStructure, flags, cullMask, r.origin, r.tMin,
                                   r.direction, r.tMax);
             runQuery(*q, uint32_t(i), intersect, userData);
             writeHit(q->committed, pHits[i]);
+        };
+        uint32_t order[kRaysPerTask], groupSize[kRaysPerTask];
+        const uint32_t groups = vkas::gatherPackets(rays, n, packets, originTolerance, order, groupSize);
+        for (uint32_t g = 0, k = 0; g < groups; k += groupSize[g++]) {
+            if (groupSize[g] == 1) {
+                traceAlone(order[k]);
+                continue;
+            }
+            vkas::KernelRay packet[vkas::kPacketWidth];
+            vkas::QueryHit hits[vkas::kPacketWidth];
+            for (uint32_t l = 0; l < groupSize[g]; ++l) packet[l] = rays[order[k + l]];
+            uint32_t tied = 0;
+            const bool traced = vkas::tracePacket(block, vkas::resolveAccelerationStructure, packet, groupSize[g],
+                                                  *scratch, hits, tied);
+            for (uint32_t l = 0; l < groupSize[g]; ++l) {
+                if (traced && !((tied >> l) & 1u))
+                    writeHit(hits[l], pHits[first + order[k + l]]);
+                else
+                    traceAlone(order[k + l]);  // a tie the packet's order decided, or rays the packet cannot take
+            }
         }
     });
     return VK_SUCCESS;

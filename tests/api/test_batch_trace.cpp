@@ -120,6 +120,71 @@ TEST_P(batch_trace, matches_ray_query) {
     EXPECT_GT(hits, rays.size());  // the rays do meet the scene
 }
 
+// Camera rays (an image, row by row, from one eye): the batch traces them as packets (engine/trace/packet_gather.hpp),
+// and each must still get the ray query's hit, ties included.
+TEST_P(batch_trace, camera_rays_match_ray_query) {
+    const VkBuildAccelerationStructureFlagsKHR buildFlags[3] = {
+        0, VK_BUILD_ACCELERATION_STRUCTURE_PREFER_FAST_TRACE_BIT_KHR,
+        VK_BUILD_ACCELERATION_STRUCTURE_PREFER_FAST_BUILD_BIT_KHR};
+    BuildOptions opt;
+    opt.flags = buildFlags[GetParam().build];
+    auto soup = makeGeometry(soupWithTies(rng), VK_INDEX_TYPE_UINT32, rng.coin() ? VK_GEOMETRY_OPAQUE_BIT_KHR : 0);
+    auto knot = makeGeometry(torusKnot(80, 10), VK_INDEX_TYPE_UINT16, VK_GEOMETRY_OPAQUE_BIT_KHR);
+    AccelStruct* soupBlas = buildBlas(*soup, opt);
+    AccelStruct* knotBlas = buildBlas(*knot, opt);
+    std::vector<Instance> instances;
+    const int count = GetParam().manyInstances ? 12 : 1;
+    for (int i = 0; i < count; ++i) {
+        Instance inst;
+        if (count > 1) {
+            inst.transform = randomTransform(rng, 0.5f, 1.5f, rng.coin(), 1.5f);
+            inst.mask = rng.u32() & 0xFF;
+            inst.flags = kInstanceFlagChoices[rng.u32() % std::size(kInstanceFlagChoices)];
+        }
+        inst.blas = i % 2 ? knotBlas : soupBlas;
+        instances.push_back(inst);
+    }
+    AccelStruct* tlas = buildTlas(instances, opt);
+    size_t hits = 0;
+    for (int pass = 0; pass < 4; ++pass) {
+        const uint32_t flags = pass == 0 ? 0u : kRayFlagChoices[rng.u32() % std::size(kRayFlagChoices)];
+        const uint32_t cullMask = pass == 0 ? 0xFF : rng.u32() & 0xFF;
+        const float eye[3] = {rng.uniformf(-1, 1), rng.uniformf(-1, 1), rng.uniformf(3, 5)};
+        const uint32_t side = 64;
+        std::vector<oracle::Ray> rays;
+        for (uint32_t y = 0; y < side; ++y)
+            for (uint32_t x = 0; x < side; ++x) {
+                oracle::Ray r;
+                const float sx = 0.15f * (2.0f * (x + 0.5f) / side - 1.0f), sy = 0.15f * (1.0f - 2.0f * (y + 0.5f) / side);
+                // (pixels 0.0047 apart: runs of 8 are within the gather's 0.05 and become packets)
+                for (int a = 0; a < 3; ++a) r.origin[a] = eye[a];
+                r.direction = {sx - 0.1f * eye[0], sy - 0.1f * eye[1], -1.0f};
+                r.tMin = 0.0f;
+                r.tMax = INFINITY;
+                rays.push_back(r);
+            }
+        std::vector<VkasRay> batch;
+        for (const auto& r : rays) batch.push_back(toBatch(r));
+        for (VkasTraceMode mode : {VKAS_TRACE_MODE_CLOSEST_HIT, VKAS_TRACE_MODE_ANY_HIT}) {
+            std::vector<VkasHit> out(rays.size());
+            ASSERT_EQ(vkasTraceRays(device, tlas->handle, mode, flags, cullMask, uint32_t(rays.size()), batch.data(),
+                                    out.data()),
+                      VK_SUCCESS);
+            const uint32_t queryFlags = flags | (mode == VKAS_TRACE_MODE_ANY_HIT ? VKAS_RAY_FLAG_TERMINATE_ON_FIRST_HIT : 0);
+            for (size_t i = 0; i < rays.size(); ++i) {
+                const QueryTrace q = query(tlas->handle, rays[i], queryFlags, cullMask, Confirm::All);
+                const Hit got = fromBatch(out[i]);
+                hits += q.committed.type != 0;
+                ASSERT_TRUE(identical(q.committed, got))
+                    << "ray " << i << " " << describe(rays[i]) << " flags 0x" << std::hex << flags << " mask 0x"
+                    << cullMask << std::dec << " mode " << int(mode) << ": query " << q.committed.str() << ", batch "
+                    << got.str();
+            }
+        }
+    }
+    EXPECT_GT(hits, 400u);  // pass 0 culls nothing and the image looks at the scene
+}
+
 const BatchParam kBatchParams[] = {{0, false}, {0, true}, {1, true}, {2, false}, {2, true}};
 
 std::string batchParamName(const ::testing::TestParamInfo<BatchParam>& info) {

@@ -10,6 +10,7 @@
 #include "engine/trace/hit_rules.hpp"
 #include "engine/trace/node_test_avx2.hpp"
 #include "engine/trace/node_test_sse.hpp"
+#include "engine/trace/packet_tests.hpp"
 #include "engine/trace/ray.hpp"
 #include "engine/trace/traversal_steps.hpp"
 #include "engine/trace/triangle_leaf_test.hpp"
@@ -33,6 +34,7 @@ inline uint32_t childEntries(const format::Node& node, const ShearedRay& r, floa
     return childEntryDistances(node, r, tMin, tMax, out);
 }
 #include "engine/trace/batch_kernel_body.hpp"
+#include "engine/trace/packet_kernel_body.hpp"
 }  // namespace baseline
 
 #if VKAS_KERNEL_AVX2
@@ -50,6 +52,7 @@ inline uint32_t childEntries(const format::Node& node, const ShearedRay& r, floa
     return childEntryDistancesAvx2(node, r, tMin, tMax, out);
 }
 #include "engine/trace/batch_kernel_body.hpp"
+#include "engine/trace/packet_kernel_body.hpp"
 }  // namespace avx2
 #if defined(__clang__)
 #pragma clang attribute pop
@@ -59,23 +62,38 @@ inline uint32_t childEntries(const format::Node& node, const ShearedRay& r, floa
 #endif
 
 using KernelFn = bool (*)(const std::byte*, BlasResolver, const KernelRay&, KernelScratch&, QueryHit&);
+using PacketFn = bool (*)(const std::byte*, BlasResolver, const KernelRay*, uint32_t, PacketScratch&, QueryHit*,
+                          uint32_t&);
+struct Kernels {
+    KernelFn single;
+    PacketFn packet;
+};
 
 // AVX2 where the CPU has it, unless VKAS_TRACE_KERNEL=sse2 asks for the baseline (tests run both).
-KernelFn chooseKernel() {
+Kernels chooseKernels() {
 #if VKAS_KERNEL_AVX2
     const char* forced = std::getenv("VKAS_TRACE_KERNEL");
     const bool baselineOnly = forced && std::strcmp(forced, "sse2") == 0;
-    if (!baselineOnly && __builtin_cpu_supports("avx2")) return avx2::traceWith;
+    if (!baselineOnly && __builtin_cpu_supports("avx2")) return {avx2::traceWith, avx2::tracePacketWith};
 #endif
-    return baseline::traceWith;
+    return {baseline::traceWith, baseline::tracePacketWith};
+}
+
+const Kernels& kernels() {
+    static const Kernels chosen = chooseKernels();
+    return chosen;
 }
 
 }  // namespace
 
 bool traceKernel(const std::byte* topLevel, BlasResolver resolver, const KernelRay& ray, KernelScratch& scratch,
                  QueryHit& committed) {
-    static const KernelFn kernel = chooseKernel();
-    return kernel(topLevel, resolver, ray, scratch, committed);
+    return kernels().single(topLevel, resolver, ray, scratch, committed);
+}
+
+bool tracePacket(const std::byte* topLevel, BlasResolver resolver, const KernelRay* rays, uint32_t count,
+                 PacketScratch& scratch, QueryHit* hits, uint32_t& tied) {
+    return kernels().packet(topLevel, resolver, rays, count, scratch, hits, tied);
 }
 
 }  // namespace vkas

@@ -13,6 +13,7 @@
 #include <cstddef>
 #include <cstdint>
 
+#include "engine/trace/packet_tests.hpp"
 #include "engine/trace/ray_query.hpp"
 
 namespace vkas {
@@ -39,5 +40,24 @@ struct KernelScratch {
 // when the ray meets something the kernel does not handle (a motion top level, motion triangles, spheres, LSS).
 bool traceKernel(const std::byte* topLevel, BlasResolver resolver, const KernelRay& ray, KernelScratch& scratch,
                  QueryHit& committed);
+
+// Working memory of the packet kernel: its own stack (each entry with the rays it holds) and a single-ray scratch
+// for the rays that go on alone.
+struct PacketScratch {
+    KernelScratch single;
+    struct Stack {
+        format::ChildRef ref[kStackCapacity];
+        float dist[kStackCapacity];
+        uint32_t lanes[kStackCapacity];
+    } stack;
+};
+
+// Traces rays[0, count) (count 1 to kPacketWidth: closest-hit rays with the same flags and cull mask whose
+// directions share one octant, no component zero) together as a packet (packet_kernel_body.hpp) into hits[], each
+// the hit traceKernel gives that ray, except for the rays whose bit `tied` has: they met two triangles at the same t
+// and the packet's order chose between them, so the caller traces them again with traceKernel. Returns false, with
+// hits unspecified, where traceKernel would (or the rays do not form a packet): the caller traces them one by one.
+bool tracePacket(const std::byte* topLevel, BlasResolver resolver, const KernelRay* rays, uint32_t count,
+                 PacketScratch& scratch, QueryHit* hits, uint32_t& tied);
 
 }  // namespace vkas

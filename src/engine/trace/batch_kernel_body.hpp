@@ -12,11 +12,15 @@ struct Walk {
     const format::InstanceRecord* instance;
     QueryHit* committed;
     bool done;
+    bool tied;  // (packets) a triangle was met at exactly the committed t: the order of the two decided the hit
 };
 
 // The triangle decision of the ray query (hit_rules.hpp) for each lane of a leaf that the four-lane test
 // (triangle_leaf_test.hpp) leaves: a non-opaque candidate needs no application decision here and is confirmed on the
-// spot, as queryRunToCompletion does. Lanes are taken in order, so hits and ties are the ray query's.
+// spot, as queryRunToCompletion does. Lanes are taken in order, so hits and ties are the ray query's. With
+// kFindTies (a ray of a packet, which meets the leaves in another order than it would alone), a triangle met at
+// exactly the committed t is noted in w.tied: the strict interval drops it, so the order decided between the two.
+template <bool kFindTies>
 static inline void testTriangleLeaf(Walk& w, const std::byte* records, format::ChildRef leafRef) {
     const format::ConstTriangleLeaf leaf = format::triangleLeaf(records, format::leafFirst(leafRef), format::leafCount(leafRef));
     const uint32_t instanceFlags = w.instance->sbtOffsetAndFlags >> 24;
@@ -26,7 +30,9 @@ static inline void testTriangleLeaf(Walk& w, const std::byte* records, format::C
         for (uint32_t lanes = e.covered | e.undecided; lanes != 0; lanes &= lanes - 1) {
             const uint32_t lane = uint32_t(__builtin_ctz(lanes));
             TriangleCandidate c;
-            if (!leafLaneCandidate(leaf, lane0, lane, e, w.objectRay, w.tMin, w.tMax, w.flags, instanceFlags, c)) continue;
+            if (!leafLaneHit(leaf, lane0, lane, e, w.objectRay, c.hit)) continue;
+            if (kFindTies && c.hit.t == w.tMax && w.committed->type != kCommittedNone) w.tied = true;
+            if (!acceptTriangleHit(w.tMin, w.tMax, w.flags, instanceFlags, leaf.flags(lane0 + lane), c)) continue;
             float v[3][3];
             leaf.positions(lane0 + lane, v);
             setTriangleHit(*w.committed, kCommittedTriangle, c, leaf.geometryIndex(lane0 + lane),
@@ -81,11 +87,43 @@ static inline void walkTree(Walk& w, const format::Node* nodes, const ShearedRay
 }
 
 // The leaves of a bottom level: its triangles.
+template <bool kFindTies>
 struct TriangleLeaves {
     Walk& w;
     const std::byte* records;
-    void operator()(format::ChildRef leaf, uint32_t) const { testTriangleLeaf(w, records, leaf); }
+    void operator()(format::ChildRef leaf, uint32_t) const { testTriangleLeaf<kFindTies>(w, records, leaf); }
 };
+
+// The bottom level an instance references, through the scratch's one-entry cache.
+static inline const std::byte* resolveCached(KernelScratch& s, BlasResolver resolver, uint64_t reference) {
+    if (reference == s.cachedReference && s.cachedBlas) return s.cachedBlas;
+    const std::byte* blas = resolver ? resolver(reference) : nullptr;
+    s.cachedReference = reference;
+    s.cachedBlas = blas;
+    return blas;
+}
+
+// The bottom level of an instance the kernel can walk: its header, or null when the ray skips it (no tree, AABBs,
+// the Skip ray flags). Sets `supported` to false for what the kernel does not cover (motion, spheres, LSS).
+static inline const format::Header* walkableBottomLevel(const std::byte* blas, uint32_t rayFlags, bool& supported) {
+    const format::Header* h = traversableStructure(blas, format::StructureType::BottomLevel);
+    if (!h) return nullptr;
+    // AABB candidates are dropped without an intersection step: such an instance adds nothing.
+    if (h->primitiveType == VK_GEOMETRY_TYPE_AABBS_KHR || skippedByRayFlags(*h, rayFlags)) return nullptr;
+    if (h->primitiveType != VK_GEOMETRY_TYPE_TRIANGLES_KHR || motion::isMotionBuild(h->buildFlags)) {
+        supported = false;
+        return nullptr;
+    }
+    return h;
+}
+
+// The ray in the object space of `inst`, as ray_query.cpp's enterInstance does.
+static inline void enterInstance(Walk& w, const format::InstanceRecord& inst) {
+    float oo[3], od[3];
+    transformRay(inst.worldToObject, w.worldRay.org, w.worldRay.dir, oo, od);
+    prepareShearedRay(w.objectRay, oo, od);
+    w.instance = &inst;
+}
 
 // The leaves of the top level: instances, each entered as ray_query.cpp's enterInstance does.
 struct InstanceLeaves {
@@ -95,37 +133,36 @@ struct InstanceLeaves {
     const format::InstanceRecord* instances;
     bool& supported;
 
-    const std::byte* resolve(uint64_t reference) const {
-        if (reference == s.cachedReference && s.cachedBlas) return s.cachedBlas;
-        const std::byte* blas = resolver ? resolver(reference) : nullptr;
-        s.cachedReference = reference;
-        s.cachedBlas = blas;
-        return blas;
-    }
-
     void operator()(format::ChildRef leaf, uint32_t sp) const {
         for (uint64_t i = format::leafFirst(leaf), end = i + format::leafCount(leaf); i < end; ++i) {
             const format::InstanceRecord& inst = instances[i];
             if (!instanceVisible(inst, w.cullMask)) continue;
-            const std::byte* blas = resolve(inst.reference);
-            const format::Header* h = traversableStructure(blas, format::StructureType::BottomLevel);
-            if (!h) continue;
-            // AABB candidates are dropped without an intersection step: such an instance adds nothing.
-            if (h->primitiveType == VK_GEOMETRY_TYPE_AABBS_KHR || skippedByRayFlags(*h, w.flags)) continue;
-            if (h->primitiveType != VK_GEOMETRY_TYPE_TRIANGLES_KHR || motion::isMotionBuild(h->buildFlags)) {
-                supported = false;
+            const std::byte* blas = resolveCached(s, resolver, inst.reference);
+            const format::Header* h = walkableBottomLevel(blas, w.flags, supported);
+            if (!supported) {
                 w.done = true;
                 return;
             }
-            float oo[3], od[3];
-            transformRay(inst.worldToObject, w.worldRay.org, w.worldRay.dir, oo, od);
-            prepareShearedRay(w.objectRay, oo, od);
-            w.instance = &inst;
-            walkTree(w, format::nodes(blas), w.objectRay, h->root, s, sp, TriangleLeaves{w, format::records(blas)});
+            if (!h) continue;
+            enterInstance(w, inst);
+            walkTree(w, format::nodes(blas), w.objectRay, h->root, s, sp,
+                     TriangleLeaves<false>{w, format::records(blas)});
             if (w.done) return;
         }
     }
 };
+
+static inline void startWalk(Walk& w, const KernelRay& ray, QueryHit& committed) {
+    prepareShearedRay(w.worldRay, ray.origin, ray.direction);
+    w.tMin = ray.tMin;
+    w.tMax = ray.tMax;
+    w.flags = ray.flags;
+    w.cullMask = ray.cullMask;
+    w.instance = nullptr;
+    w.committed = &committed;
+    w.done = false;
+    w.tied = false;
+}
 
 static bool traceWith(const std::byte* topLevel, BlasResolver resolver, const KernelRay& ray, KernelScratch& s,
                       QueryHit& committed) {
@@ -135,14 +172,7 @@ static bool traceWith(const std::byte* topLevel, BlasResolver resolver, const Ke
     if (!top) return true;  // a null acceleration structure: every ray misses
     if (motion::isMotionBuild(top->buildFlags)) return false;
     Walk w;
-    prepareShearedRay(w.worldRay, ray.origin, ray.direction);
-    w.tMin = ray.tMin;
-    w.tMax = ray.tMax;
-    w.flags = ray.flags;
-    w.cullMask = ray.cullMask;
-    w.instance = nullptr;
-    w.committed = &committed;
-    w.done = false;
+    startWalk(w, ray, committed);
     bool supported = true;
     walkTree(w, format::nodes(topLevel), w.worldRay, top->root, s, 0,
              InstanceLeaves{w, s, resolver, format::instances(topLevel), supported});

@@ -120,13 +120,18 @@ inline bool triangleCandidate(const ShearedRay& r, float tMin, float tMax, uint3
 
 // The same decision for lane `lane` of the four from `lane0` of a format-2 leaf that edgesOfFour left (its edge
 // functions already computed): the ray query and both batch kernels take the lanes of a leaf through it, in order.
+// Its first half, the intersection (unless the triangle is degenerate), is leafLaneHit: a packet of rays
+// (packet_kernel_body.hpp) looks at t before the interval test, to find ties.
+inline bool leafLaneHit(const format::ConstTriangleLeaf& leaf, uint32_t lane0, uint32_t lane, const FourLaneEdges& e,
+                        const ShearedRay& r, TriangleHit& hit) {
+    if (leaf.flags(lane0 + lane) & format::kTriangleDegenerate) return false;
+    return laneIntersection(leaf, lane0, lane, e, r, hit);
+}
 inline bool leafLaneCandidate(const format::ConstTriangleLeaf& leaf, uint32_t lane0, uint32_t lane,
                               const FourLaneEdges& e, const ShearedRay& r, float tMin, float tMax, uint32_t rayFlags,
                               uint32_t instanceFlags, TriangleCandidate& out) {
-    const uint32_t flags = leaf.flags(lane0 + lane);
-    if (flags & format::kTriangleDegenerate) return false;
-    if (!laneIntersection(leaf, lane0, lane, e, r, out.hit)) return false;
-    return acceptTriangleHit(tMin, tMax, rayFlags, instanceFlags, flags, out);
+    return leafLaneHit(leaf, lane0, lane, e, r, out.hit) &&
+           acceptTriangleHit(tMin, tMax, rayFlags, instanceFlags, leaf.flags(lane0 + lane), out);
 }
 
 // Starts hit record `h` of `type` at t on `instance`, seen along the object-space ray `r`: no primitive yet, no
