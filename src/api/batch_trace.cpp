@@ -15,7 +15,7 @@
 
 namespace {
 
-constexpr uint32_t kRaysPerTask = 256;
+constexpr uint32_t kRaysPerTask = vkas::kMaxGather;  // each task gathers its rays into packets
 
 void writeHit(const vkas::QueryHit& h, VkasHit& out) {
     out.type = h.type;

@@ -18,7 +18,7 @@
 
 #if defined(__x86_64__)
 #include <immintrin.h>
-#define VKAS_KERNEL_AVX2 VKAS_NODE_TEST_AVX2
+#define VKAS_KERNEL_AVX2 (VKAS_NODE_TEST_AVX2 && VKAS_PACKET_TESTS_AVX2)
 #endif
 
 namespace vkas {
@@ -27,11 +27,19 @@ namespace {
 
 using format::ChildRef;
 
-// The baseline kernel: the node test the ray query uses (SSE2, 4 lanes twice).
+// The baseline kernel: the node test the ray query uses (SSE2, 4 lanes twice), and the packet tests in SSE2.
 namespace baseline {
 inline uint32_t childEntries(const format::Node& node, const ShearedRay& r, float tMin, float tMax,
                              float out[format::kNodeWidth]) {
     return childEntryDistances(node, r, tMin, tMax, out);
+}
+inline uint32_t groupEntries(const format::Node& node, const PacketFrustum& f, float tMax,
+                             float entry[format::kNodeWidth]) {
+    return packetChildEntries(node, f, tMax, entry);
+}
+inline uint32_t lanesEntering(const format::Node& node, uint32_t slot, const PacketFrustum& f, const PacketLanes& L,
+                              const float* tMin, const float* tMax, uint32_t lanes) {
+    return lanesEnteringChild(node, slot, f, L, tMin, tMax, lanes);
 }
 #include "engine/trace/batch_kernel_body.hpp"
 #include "engine/trace/packet_kernel_body.hpp"
@@ -39,7 +47,7 @@ inline uint32_t childEntries(const format::Node& node, const ShearedRay& r, floa
 
 #if VKAS_KERNEL_AVX2
 // The AVX2 kernel: the same body compiled for AVX2 (no FMA: -ffp-contract=off and no FMA target keep the rounding
-// of every operation), with the 8-lane node test (node_test_avx2.hpp).
+// of every operation), with the 8-lane node test (node_test_avx2.hpp) and packet tests (packet_tests.hpp).
 #if defined(__clang__)
 #pragma clang attribute push(__attribute__((target("avx2"))), apply_to = function)
 #else
@@ -50,6 +58,14 @@ namespace avx2 {
 inline uint32_t childEntries(const format::Node& node, const ShearedRay& r, float tMin, float tMax,
                              float out[format::kNodeWidth]) {
     return childEntryDistancesAvx2(node, r, tMin, tMax, out);
+}
+inline uint32_t groupEntries(const format::Node& node, const PacketFrustum& f, float tMax,
+                             float entry[format::kNodeWidth]) {
+    return packetChildEntriesAvx2(node, f, tMax, entry);
+}
+inline uint32_t lanesEntering(const format::Node& node, uint32_t slot, const PacketFrustum& f, const PacketLanes& L,
+                              const float* tMin, const float* tMax, uint32_t lanes) {
+    return lanesEnteringChildAvx2(node, slot, f, L, tMin, tMax, lanes);
 }
 #include "engine/trace/batch_kernel_body.hpp"
 #include "engine/trace/packet_kernel_body.hpp"

@@ -27,32 +27,56 @@ uint32_t groupOf(const KernelRay& r) {
     return octant * 3 + dominant;
 }
 
+// What the gather knows of each ray: its group, and for a ray that can join a packet its unit direction.
+struct Gathered {
+    uint32_t group[kMaxGather];
+    float unit[kMaxGather][3];
+};
+
+void unitDirection(const KernelRay& r, float out[3]) {
+    const float scale = 1.0f / std::sqrt(r.direction[0] * r.direction[0] + r.direction[1] * r.direction[1] +
+                                         r.direction[2] * r.direction[2]);
+    for (int a = 0; a < 3; ++a) out[a] = r.direction[a] * scale;
+}
+
+constexpr float kDirectionSpread = 0.05f;  // unit directions of one packet within this on every axis: ~3 degrees
+
 // Whether rays order[0, n) are coherent enough for one packet: unit directions within kDirectionSpread of each
-// other on every axis (about 3 degrees) and origins within originTolerance.
-bool coherent(const KernelRay* rays, const uint32_t* order, uint32_t n, float originTolerance) {
-    constexpr float kDirectionSpread = 0.05f;
+// other on every axis and origins within originTolerance.
+bool coherent(const KernelRay* rays, const Gathered& g, const uint32_t* order, uint32_t n, float originTolerance) {
     float dLo[3], dHi[3], oLo[3], oHi[3];
-    for (uint32_t k = 0; k < n; ++k) {
-        const KernelRay& r = rays[order[k]];
-        const float scale = 1.0f / std::sqrt(r.direction[0] * r.direction[0] + r.direction[1] * r.direction[1] +
-                                             r.direction[2] * r.direction[2]);
+    for (int a = 0; a < 3; ++a) {
+        dLo[a] = dHi[a] = g.unit[order[0]][a];
+        oLo[a] = oHi[a] = rays[order[0]].origin[a];
+    }
+    for (uint32_t k = 1; k < n; ++k) {
         for (int a = 0; a < 3; ++a) {
-            const float d = r.direction[a] * scale, o = r.origin[a];
-            if (k == 0) {
-                dLo[a] = dHi[a] = d, oLo[a] = oHi[a] = o;
-                continue;
-            }
+            const float d = g.unit[order[k]][a], o = rays[order[k]].origin[a];
             dLo[a] = d < dLo[a] ? d : dLo[a], dHi[a] = d > dHi[a] ? d : dHi[a];
             oLo[a] = o < oLo[a] ? o : oLo[a], oHi[a] = o > oHi[a] ? o : oHi[a];
         }
-        // Most incoherent runs (diffuse bounces) fail on their first rays.
-        if (k >= 1 && !(dHi[0] - dLo[0] <= kDirectionSpread && dHi[1] - dLo[1] <= kDirectionSpread &&
-                        dHi[2] - dLo[2] <= kDirectionSpread))
-            return false;
     }
     for (int a = 0; a < 3; ++a)
-        if (!(oHi[a] - oLo[a] <= originTolerance)) return false;
+        if (!(dHi[a] - dLo[a] <= kDirectionSpread) || !(oHi[a] - oLo[a] <= originTolerance)) return false;
     return true;
+}
+
+// Whether neighbours in the batch are mostly coherent (an image's rays) or mostly not (bounces, shadow rays to
+// area lights): without enough coherent neighbours the batch is traced in its own order, ray by ray, and the sort
+// is not paid for.
+bool worthGathering(const KernelRay* rays, const Gathered& g, uint32_t count, float originTolerance) {
+    uint32_t close = 0;
+    for (uint32_t i = 1; i < count; ++i) {
+        if (g.group[i] == kAlone || g.group[i] != g.group[i - 1]) continue;
+        bool near = true;
+        for (int a = 0; a < 3; ++a) {
+            const float dd = g.unit[i][a] - g.unit[i - 1][a], od = rays[i].origin[a] - rays[i - 1].origin[a];
+            near = near && dd <= kDirectionSpread && -dd <= kDirectionSpread && od <= originTolerance &&
+                   -od <= originTolerance;
+        }
+        close += near ? 1u : 0u;
+    }
+    return 4 * close >= count;
 }
 
 }  // namespace
@@ -79,26 +103,30 @@ float packetOriginTolerance(const float bounds[6]) {
 uint32_t gatherPackets(const KernelRay* rays, uint32_t count, PacketPolicy policy, float originTolerance,
                        uint32_t* order, uint32_t* groupSize) {
     uint32_t groups = 0;
-    if (policy == PacketPolicy::Off) {
+    auto oneByOne = [&] {
         for (uint32_t i = 0; i < count; ++i) order[i] = i, groupSize[groups++] = 1;
         return groups;
+    };
+    if (policy == PacketPolicy::Off || count > kMaxGather) return oneByOne();
+    Gathered g;
+    for (uint32_t i = 0; i < count; ++i) {
+        g.group[i] = groupOf(rays[i]);
+        if (g.group[i] != kAlone) unitDirection(rays[i], g.unit[i]);
     }
+    if (policy == PacketPolicy::Coherent && !worthGathering(rays, g, count, originTolerance)) return oneByOne();
     // A stable counting sort by group keeps each group's rays in batch order (neighbours in an image stay
     // neighbours); order[] holds group after group.
     uint32_t start[kGroups + 3] = {};  // keys 0 to kAlone, counted two places up
-    for (uint32_t i = 0; i < count; ++i) {
-        groupSize[i] = groupOf(rays[i]);  // (groupSize[] holds each ray's group until the groups are cut)
-        ++start[groupSize[i] + 2];
-    }
-    for (uint32_t g = 3; g < kGroups + 3; ++g) start[g] += start[g - 1];
-    for (uint32_t i = 0; i < count; ++i) order[start[groupSize[i] + 1]++] = i;
-    // start[g + 1] is now the end of group g, start[g] its beginning.
-    for (uint32_t g = 0; g <= kGroups; ++g) {
-        const uint32_t begin = start[g], end = start[g + 1];
+    for (uint32_t i = 0; i < count; ++i) ++start[g.group[i] + 2];
+    for (uint32_t k = 3; k < kGroups + 3; ++k) start[k] += start[k - 1];
+    for (uint32_t i = 0; i < count; ++i) order[start[g.group[i] + 1]++] = i;
+    // start[k + 1] is now the end of group k, start[k] its beginning.
+    for (uint32_t key = 0; key <= kGroups; ++key) {
+        const uint32_t begin = start[key], end = start[key + 1];
         for (uint32_t k = begin; k < end;) {
             uint32_t n = end - k < kPacketWidth ? end - k : kPacketWidth;
-            if (g == kAlone || n < 2 ||
-                (policy == PacketPolicy::Coherent && !coherent(rays, order + k, n, originTolerance)))
+            if (key == kAlone || n < 2 ||
+                (policy == PacketPolicy::Coherent && !coherent(rays, g, order + k, n, originTolerance)))
                 n = 1;
             groupSize[groups++] = n;
             k += n;

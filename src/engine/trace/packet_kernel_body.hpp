@@ -1,6 +1,7 @@
 // The packet kernel (batch_kernel.hpp, tracePacket): up to kPacketWidth closest-hit rays of one octant traced
 // together, included by batch_kernel.cpp once per instruction set after batch_kernel_body.hpp (whose Walk, walkTree
-// and leaf tests it uses; no include guard, on purpose).
+// and leaf tests it uses, with groupEntries and lanesEntering: the packet tests of that instruction set; no include
+// guard, on purpose).
 //
 // Inner nodes are decided for the whole packet by the group test (packet_tests.hpp), one pass over the 8 children,
 // instead of one pass per ray; a leaf child is then tested against each ray (the lane test), and the rays that
@@ -59,7 +60,7 @@ static inline void walkPacket(PacketWalk& p, const format::Node* nodes, const Pa
         while (format::isInternal(ref)) {
             const format::Node& node = nodes[format::nodeIndex(ref)];
             float entry[format::kNodeWidth];
-            uint32_t mask = packetChildEntries(node, f, p.tMaxAll, entry);
+            uint32_t mask = groupEntries(node, f, p.tMaxAll, entry);
             format::ChildRef refs[format::kNodeWidth];
             float dist[format::kNodeWidth];
             uint32_t childLanes[format::kNodeWidth];
@@ -70,7 +71,7 @@ static inline void walkPacket(PacketWalk& p, const format::Node* nodes, const Pa
                 if (child == format::kEmptyRef) continue;
                 uint32_t enter = lanes;
                 if (format::isLeaf(child)) {
-                    enter = lanesEnteringChild(node, i, f, L, p.tMin, p.tMax, lanes);
+                    enter = lanesEntering(node, i, f, L, p.tMin, p.tMax, lanes);
                     if (enter == 0) continue;
                 } else {
                     prefetchNode(nodes + format::nodeIndex(child));
@@ -122,15 +123,11 @@ struct PacketInstanceLeaves {
             const format::Header* h = walkableBottomLevel(blas, flags, p.supported);
             if (!p.supported) return;
             if (!h) continue;
-            ShearedRay objectRays[kPacketWidth];
-            for (uint32_t m = lanes; m != 0; m &= m - 1) {
-                const uint32_t l = uint32_t(__builtin_ctz(m));
-                enterInstance(p.ray[l], inst);
-                objectRays[l] = p.ray[l].objectRay;
-            }
+            for (uint32_t m = lanes; m != 0; m &= m - 1) enterInstance(p.ray[__builtin_ctz(m)], inst);
             PacketLanes L;
             PacketFrustum f;
-            if ((lanes & (lanes - 1)) != 0 && packetFrustum(objectRays, lanes, p.tMin, L, f)) {
+            const auto objectRay = [&](uint32_t l) -> const ShearedRay& { return p.ray[l].objectRay; };
+            if ((lanes & (lanes - 1)) != 0 && packetFrustum(objectRay, lanes, p.tMin, L, f)) {
                 walkPacket(p, format::nodes(blas), L, f, h->root, lanes, stack, sp,
                            PacketTriangleLeaves{p, format::records(blas)});
             } else {
@@ -158,10 +155,8 @@ static bool tracePacketWith(const std::byte* topLevel, BlasResolver resolver, co
     PacketWalk p;
     p.lanes = (1u << count) - 1u;
     p.supported = true;
-    ShearedRay worldRays[kPacketWidth];
     for (uint32_t l = 0; l < count; ++l) {
         startWalk(p.ray[l], rays[l], hits[l]);
-        worldRays[l] = p.ray[l].worldRay;
         p.tMin[l] = rays[l].tMin;
         // One packet shares the batch's flags and mask; terminate-on-first-hit rays keep the first hit they meet,
         // which depends on the order, so they never come here.
@@ -172,7 +167,8 @@ static bool tracePacketWith(const std::byte* topLevel, BlasResolver resolver, co
     refreshPacketBounds(p);
     PacketLanes L;
     PacketFrustum f;
-    if (!packetFrustum(worldRays, p.lanes, p.tMin, L, f)) return false;
+    const auto worldRay = [&](uint32_t l) -> const ShearedRay& { return p.ray[l].worldRay; };
+    if (!packetFrustum(worldRay, p.lanes, p.tMin, L, f)) return false;
     walkPacket(p, format::nodes(topLevel), L, f, top->root, p.lanes, s.stack, 0,
                PacketInstanceLeaves{p, s.stack, s.single, resolver, format::instances(topLevel)});
     if (!p.supported) return false;

@@ -29,7 +29,7 @@
 
 namespace vkas {
 
-constexpr uint32_t kPacketWidth = 8;
+constexpr uint32_t kPacketWidth = 16;  // lanes of a packet (a multiple of 8); masks of lanes are uint32_t
 
 // The rays of a packet in one space (world, or one instance's object space), one lane each.
 struct PacketLanes {
@@ -46,18 +46,19 @@ struct PacketFrustum {
     float tMin;
 };
 
-// The frustum of the lanes in `lanes` (a non-empty mask) of `rays`, or false when they do not share an octant or a
+// The frustum of the lanes in `lanes` (a non-empty mask), or false when they do not share an octant or a
 // direction component is zero, infinite or NaN somewhere (such rays are traced alone).
-inline bool packetFrustum(const ShearedRay* rays, uint32_t lanes, const float* tMin, PacketLanes& L,
-                          PacketFrustum& f) {
+// rayOf(l) is lane l's ray (a const ShearedRay&).
+template <typename RayOf>
+inline bool packetFrustum(const RayOf& rayOf, uint32_t lanes, const float* tMin, PacketLanes& L, PacketFrustum& f) {
     const uint32_t first = uint32_t(__builtin_ctz(lanes));
-    for (int a = 0; a < 3; ++a) f.negative[a] = rays[first].invDir[a] < 0.0f;
+    for (int a = 0; a < 3; ++a) f.negative[a] = rayOf(first).invDir[a] < 0.0f;
     float oLo[3] = {INFINITY, INFINITY, INFINITY}, oHi[3] = {-INFINITY, -INFINITY, -INFINITY};
     for (int a = 0; a < 3; ++a) f.invLo[a] = INFINITY, f.invHi[a] = -INFINITY;
     f.tMin = INFINITY;
     for (uint32_t l = 0; l < kPacketWidth; ++l) {
         // Lanes outside `lanes` copy the first ray, so that they compute finite values that are then masked off.
-        const ShearedRay& r = rays[(lanes >> l) & 1u ? l : first];
+        const ShearedRay& r = rayOf((lanes >> l) & 1u ? l : first);
         for (int a = 0; a < 3; ++a) {
             L.org[a][l] = r.org[a];
             L.invDir[a][l] = r.invDir[a];
@@ -175,5 +176,56 @@ inline uint32_t lanesEnteringChild(const format::Node& node, uint32_t slot, cons
     return mask;
 #endif
 }
+
+#if defined(__x86_64__)
+#define VKAS_PACKET_TESTS_AVX2 1
+// The same two tests in 8 lanes (AVX2, no FMA: the operations and so the results are those above).
+__attribute__((target("avx2"))) inline uint32_t packetChildEntriesAvx2(const format::Node& node,
+                                                                       const PacketFrustum& f, float tMax,
+                                                                       float entry[format::kNodeWidth]) {
+    const detail::PacketPlanes p(node, f.negative);
+    const float* nearPlanes[3] = {p.nearX, p.nearY, p.nearZ};
+    const float* farPlanes[3] = {p.farX, p.farY, p.farZ};
+    __m256 tNear = _mm256_set1_ps(f.tMin), tFar = _mm256_set1_ps(tMax);
+    for (int a = 0; a < 3; ++a) {
+        const __m256 lo = _mm256_set1_ps(f.invLo[a]), hi = _mm256_set1_ps(f.invHi[a]);
+        const __m256 xn = _mm256_sub_ps(_mm256_load_ps(nearPlanes[a]), _mm256_set1_ps(f.nearOrg[a]));
+        const __m256 xf = _mm256_sub_ps(_mm256_load_ps(farPlanes[a]), _mm256_set1_ps(f.farOrg[a]));
+        tNear = _mm256_max_ps(_mm256_min_ps(_mm256_mul_ps(xn, lo), _mm256_mul_ps(xn, hi)), tNear);
+        tFar = _mm256_min_ps(_mm256_max_ps(_mm256_mul_ps(xf, lo), _mm256_mul_ps(xf, hi)), tFar);
+    }
+    const __m256 inf = _mm256_set1_ps(INFINITY);
+    const __m256 hit = _mm256_cmp_ps(tNear, _mm256_mul_ps(tFar, _mm256_set1_ps(kFarSlack)), _CMP_LE_OS);
+    _mm256_storeu_ps(entry, _mm256_blendv_ps(inf, tNear, hit));
+    return uint32_t(_mm256_movemask_ps(_mm256_and_ps(hit, _mm256_cmp_ps(tNear, inf, _CMP_NEQ_OQ))));
+}
+
+__attribute__((target("avx2"))) inline uint32_t lanesEnteringChildAvx2(const format::Node& node, uint32_t slot,
+                                                                       const PacketFrustum& f, const PacketLanes& L,
+                                                                       const float* tMin, const float* tMax,
+                                                                       uint32_t lanes) {
+    const detail::PacketPlanes p(node, f.negative);
+    const __m256 nx = _mm256_set1_ps(p.nearX[slot]), ny = _mm256_set1_ps(p.nearY[slot]), nz = _mm256_set1_ps(p.nearZ[slot]);
+    const __m256 fx = _mm256_set1_ps(p.farX[slot]), fy = _mm256_set1_ps(p.farY[slot]), fz = _mm256_set1_ps(p.farZ[slot]);
+    const __m256 inf = _mm256_set1_ps(INFINITY), slack = _mm256_set1_ps(kFarSlack);
+    uint32_t mask = 0;
+    for (uint32_t k = 0; k < kPacketWidth; k += 8) {
+        if (((lanes >> k) & 0xFFu) == 0) continue;
+        const __m256 ox = _mm256_load_ps(L.org[0] + k), oy = _mm256_load_ps(L.org[1] + k), oz = _mm256_load_ps(L.org[2] + k);
+        const __m256 ix = _mm256_load_ps(L.invDir[0] + k), iy = _mm256_load_ps(L.invDir[1] + k),
+                     iz = _mm256_load_ps(L.invDir[2] + k);
+        __m256 tNear = _mm256_max_ps(_mm256_mul_ps(_mm256_sub_ps(nx, ox), ix), _mm256_loadu_ps(tMin + k));
+        tNear = _mm256_max_ps(_mm256_mul_ps(_mm256_sub_ps(ny, oy), iy), tNear);
+        tNear = _mm256_max_ps(_mm256_mul_ps(_mm256_sub_ps(nz, oz), iz), tNear);
+        __m256 tFar = _mm256_min_ps(_mm256_mul_ps(_mm256_sub_ps(fx, ox), ix), _mm256_loadu_ps(tMax + k));
+        tFar = _mm256_min_ps(_mm256_mul_ps(_mm256_sub_ps(fy, oy), iy), tFar);
+        tFar = _mm256_min_ps(_mm256_mul_ps(_mm256_sub_ps(fz, oz), iz), tFar);
+        const __m256 hit = _mm256_and_ps(_mm256_cmp_ps(tNear, _mm256_mul_ps(tFar, slack), _CMP_LE_OS),
+                                         _mm256_cmp_ps(tNear, inf, _CMP_NEQ_OQ));
+        mask |= uint32_t(_mm256_movemask_ps(hit)) << k;
+    }
+    return mask & lanes;
+}
+#endif
 
 }  // namespace vkas
