@@ -1,5 +1,6 @@
 // vkasTraceRays: many rays, each traced as a ray query run to completion would trace it, spread over the worker
 // threads.
+#include <chrono>
 #include <cstdio>
 #include <cstring>
 #include <memory>
@@ -124,6 +125,7 @@ VkResult traceBatch(VkDevice device, VkAccelerationStructureKHR topLevel, VkasTr
                            (mode == VKAS_TRACE_MODE_ANY_HIT ? VKAS_RAY_FLAG_TERMINATE_ON_FIRST_HIT : 0u);
     const uint64_t tasks = (uint64_t(rayCount) + kRaysPerTask - 1) / kRaysPerTask;
     const vkas::PacketPolicy packets = intersect ? vkas::PacketPolicy::Off : vkas::packetPolicy();
+    vkas::PacketChooser chooser(packets);
     const float originTolerance =
         block ? vkas::packetOriginTolerance(vkas::format::header(block)->bounds) : 0.0f;
     dev->workers().parallelFor(tasks, [&](uint64_t task) {
@@ -155,24 +157,39 @@ VkResult traceBatch(VkDevice device, VkAccelerationStructureKHR topLevel, VkasTr
             runQuery(*q, uint32_t(i), intersect, userData);
             writeHit(q->committed, pHits[i]);
         };
+        const vkas::PacketChooser::Choice choice = chooser.choice();
+        if (choice == vkas::PacketChooser::Choice::Alone) {
+            for (uint32_t k = 0; k < n; ++k) traceAlone(k);
+            return;
+        }
         uint32_t order[kRaysPerTask], groupSize[kRaysPerTask];
         const uint32_t groups = vkas::gatherPackets(rays, n, packets, originTolerance, order, groupSize);
+        bool packetsPay = true;  // until a packet gives up: then this task's other rays go alone
         for (uint32_t g = 0, k = 0; g < groups; k += groupSize[g++]) {
-            if (groupSize[g] == 1) {
-                traceAlone(order[k]);
-                continue;
+            const bool coherent = groupSize[g] > 1 && packetsPay;
+            const bool timed = coherent && choice == vkas::PacketChooser::Choice::Sample;
+            const bool packet = coherent && (!timed || chooser.nextSampleIsPacket());
+            const auto start = timed ? std::chrono::steady_clock::now() : std::chrono::steady_clock::time_point{};
+            if (packet) {
+                vkas::KernelRay packetRays[vkas::kPacketWidth];
+                vkas::QueryHit hits[vkas::kPacketWidth];
+                for (uint32_t l = 0; l < groupSize[g]; ++l) packetRays[l] = rays[order[k + l]];
+                uint32_t tied = 0;
+                packetsPay = vkas::tracePacket(block, vkas::resolveAccelerationStructure, packetRays, groupSize[g],
+                                               *scratch, hits, tied);
+                for (uint32_t l = 0; l < groupSize[g]; ++l) {
+                    if (packetsPay && !((tied >> l) & 1u))
+                        writeHit(hits[l], pHits[first + order[k + l]]);
+                    else
+                        traceAlone(order[k + l]);  // a tie the packet's order decided, or rays it cannot take
+                }
+            } else {
+                for (uint32_t l = 0; l < groupSize[g]; ++l) traceAlone(order[k + l]);
             }
-            vkas::KernelRay packet[vkas::kPacketWidth];
-            vkas::QueryHit hits[vkas::kPacketWidth];
-            for (uint32_t l = 0; l < groupSize[g]; ++l) packet[l] = rays[order[k + l]];
-            uint32_t tied = 0;
-            const bool traced = vkas::tracePacket(block, vkas::resolveAccelerationStructure, packet, groupSize[g],
-                                                  *scratch, hits, tied);
-            for (uint32_t l = 0; l < groupSize[g]; ++l) {
-                if (traced && !((tied >> l) & 1u))
-                    writeHit(hits[l], pHits[first + order[k + l]]);
-                else
-                    traceAlone(order[k + l]);  // a tie the packet's order decided, or rays the packet cannot take
+            if (timed && packetsPay) {
+                const auto nanos = std::chrono::duration_cast<std::chrono::nanoseconds>(
+                    std::chrono::steady_clock::now() - start);
+                chooser.record(packet, uint64_t(nanos.count()), groupSize[g]);
             }
         }
     });

@@ -247,7 +247,7 @@ TEST_P(packets, each_ray_of_a_packet_gets_its_single_ray_hit) {
                                          VKAS_RAY_FLAG_NO_OPAQUE | VKAS_RAY_FLAG_CULL_BACK_FACING_TRIANGLES};
     auto scratch = std::make_unique<vkas::PacketScratch>();
     auto single = std::make_unique<vkas::KernelScratch>();
-    uint64_t traced = 0, tied = 0, hits = 0;
+    uint64_t traced = 0, tied = 0, hits = 0, gaveUp = 0;
     for (int pass = 0; pass < 8; ++pass) {
         const uint32_t flags = pass < 2 ? 0u : kFlagChoices[rng.below(std::size(kFlagChoices))];
         const uint32_t cullMask = pass < 2 ? 0xFF : rng.u32() & 0xFF;
@@ -269,8 +269,11 @@ TEST_P(packets, each_ray_of_a_packet_gets_its_single_ray_hit) {
                 return true;
             }();
             if (!octant) continue;
-            ASSERT_TRUE(vkas::tracePacket(block, vkas::resolveAccelerationStructure, packet, vkas::kPacketWidth,
-                                          *scratch, packetHits, tiedLanes));
+            if (!vkas::tracePacket(block, vkas::resolveAccelerationStructure, packet, vkas::kPacketWidth, *scratch,
+                                   packetHits, tiedLanes)) {
+                ++gaveUp;  // over its budget of node tests: the caller traces these rays alone
+                continue;
+            }
             for (uint32_t l = 0; l < vkas::kPacketWidth; ++l) {
                 vkas::QueryHit alone;
                 ASSERT_TRUE(vkas::traceKernel(block, vkas::resolveAccelerationStructure, packet[l], *single, alone));
@@ -289,8 +292,8 @@ TEST_P(packets, each_ray_of_a_packet_gets_its_single_ray_hit) {
             }
         }
     }
-    std::cout << traced << " rays compared, " << hits << " of them hits, " << tied << " tied (traced again alone)"
-              << std::endl;
+    std::cout << traced << " rays compared, " << hits << " of them hits, " << tied << " tied (traced again alone), "
+              << gaveUp << " packets given up" << std::endl;
     EXPECT_GT(traced, 8000u);
     EXPECT_GT(hits, 1000u);
 }

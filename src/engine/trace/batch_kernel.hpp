@@ -56,7 +56,9 @@ struct PacketScratch {
 // directions share one octant, no component zero) together as a packet (packet_kernel_body.hpp) into hits[], each
 // the hit traceKernel gives that ray, except for the rays whose bit `tied` has: they met two triangles at the same t
 // and the packet's order chose between them, so the caller traces them again with traceKernel. Returns false, with
-// hits unspecified, where traceKernel would (or the rays do not form a packet): the caller traces them one by one.
+// hits unspecified, where traceKernel would, where the rays do not form a packet, or where the packet gave up (its
+// rays spread wider than the structure's boxes, so that it cost more than the rays alone): the caller traces them
+// one by one.
 bool tracePacket(const std::byte* topLevel, BlasResolver resolver, const KernelRay* rays, uint32_t count,
                  PacketScratch& scratch, QueryHit* hits, uint32_t& tied);
 

@@ -125,7 +125,9 @@ static inline void enterInstance(Walk& w, const format::InstanceRecord& inst) {
     w.instance = &inst;
 }
 
-// The leaves of the top level: instances, each entered as ray_query.cpp's enterInstance does.
+// The leaves of the top level: instances, each entered as ray_query.cpp's enterInstance does (kFindTies: for a ray
+// of a packet, testTriangleLeaf).
+template <bool kFindTies>
 struct InstanceLeaves {
     Walk& w;
     KernelScratch& s;
@@ -146,7 +148,7 @@ struct InstanceLeaves {
             if (!h) continue;
             enterInstance(w, inst);
             walkTree(w, format::nodes(blas), w.objectRay, h->root, s, sp,
-                     TriangleLeaves<false>{w, format::records(blas)});
+                     TriangleLeaves<kFindTies>{w, format::records(blas)});
             if (w.done) return;
         }
     }
@@ -175,6 +177,6 @@ static bool traceWith(const std::byte* topLevel, BlasResolver resolver, const Ke
     startWalk(w, ray, committed);
     bool supported = true;
     walkTree(w, format::nodes(topLevel), w.worldRay, top->root, s, 0,
-             InstanceLeaves{w, s, resolver, format::instances(topLevel), supported});
+             InstanceLeaves<false>{w, s, resolver, format::instances(topLevel), supported});
     return supported;
 }

@@ -5,6 +5,7 @@
 // one by one, and a batch whose neighbouring rays are mostly not coherent is not gathered at all.
 #pragma once
 
+#include <atomic>
 #include <cstdint>
 
 #include "engine/trace/batch_kernel.hpp"
@@ -31,5 +32,47 @@ constexpr uint32_t kMaxGather = 256;
 // consecutive groups (1 for a ray traced alone, 2 to kPacketWidth for a packet). Returns the number of groups.
 uint32_t gatherPackets(const KernelRay* rays, uint32_t count, PacketPolicy policy, float originTolerance,
                        uint32_t* order, uint32_t* groupSize);
+
+// Between packets and rays alone, by their measured time per ray in one call: a packet saves node tests where its
+// rays are dense against the geometry and costs more where they are not (a sparse scene, or a cheap one whose rays
+// alone already stop after a few nodes, where even gathering them costs more than packets save). The call's first
+// coherent groups alternate, a packet then the same number of rays alone, timed, until each way has kSamples groups;
+// the way that took less time per ray then traces the rest of the call, and "alone" skips the gather. Only the path
+// changes, never a hit: each ray gets the same hit either way. Shared by the tasks of one call (atomics).
+class PacketChooser {
+  public:
+    enum class Choice { Sample, Packets, Alone };
+
+    explicit PacketChooser(PacketPolicy policy)
+        : fixed_(policy == PacketPolicy::Off ? Choice::Alone : policy == PacketPolicy::Always ? Choice::Packets
+                                                                                              : Choice::Sample) {}
+    Choice choice() const {
+        if (fixed_ != Choice::Sample) return fixed_;
+        return Choice(decided_.load(std::memory_order_relaxed));
+    }
+    // While sampling: whether the next coherent group goes as a packet (then alone, then as a packet ...).
+    bool nextSampleIsPacket() { return turn_.fetch_add(1, std::memory_order_relaxed) % 2 == 0; }
+    // While sampling: how long a group of `rays` took, as a packet or alone.
+    void record(bool packet, uint64_t nanoseconds, uint32_t rays) {
+        Way& w = packet ? packet_ : alone_;
+        w.nanos.fetch_add(nanoseconds, std::memory_order_relaxed);
+        w.rays.fetch_add(rays, std::memory_order_relaxed);
+        w.groups.fetch_add(1, std::memory_order_relaxed);
+        if (packet_.groups.load() >= kSamples && alone_.groups.load() >= kSamples) {
+            const bool packets = packet_.nanos.load() * alone_.rays.load() <= alone_.nanos.load() * packet_.rays.load();
+            decided_.store(uint32_t(packets ? Choice::Packets : Choice::Alone), std::memory_order_relaxed);
+        }
+    }
+
+  private:
+    static constexpr uint64_t kSamples = 8;
+    struct Way {
+        std::atomic<uint64_t> nanos{0}, rays{0}, groups{0};
+    };
+    Choice fixed_;
+    std::atomic<uint32_t> decided_{uint32_t(Choice::Sample)};
+    std::atomic<uint32_t> turn_{0};
+    Way packet_, alone_;
+};
 
 }  // namespace vkas

@@ -3,10 +3,10 @@
 // and leaf tests it uses, with groupEntries and lanesEntering: the packet tests of that instruction set; no include
 // guard, on purpose).
 //
-// Inner nodes are decided for the whole packet by the group test (packet_tests.hpp), one pass over the 8 children,
-// instead of one pass per ray; a leaf child is then tested against each ray (the lane test), and the rays that
-// enter it test its triangles alone, with the single-ray leaf test. Where the rays of a packet part ways (their
-// object-space rays at an instance leave the octant, or one ray is left) they go on alone with walkTree.
+// Inner nodes are decided for the whole packet by the group test (packet_tests.hpp), one pass over the 8 children;
+// each child that passes is then tested against each ray (the lane test, 8 rays a pass), and the rays that enter a
+// leaf test its triangles alone, with the single-ray leaf test. Where the rays of a packet part ways (fewer than kPacketMinLanes enter a subtree, or their
+// object-space rays at an instance leave the octant) they go on alone with walkTree.
 //
 // Each ray gets the single-ray kernel's hit: the group test never drops a child a ray enters, so every ray meets
 // every triangle it would meet alone, with the same tests, and keeps the nearest. Only the order differs, and it
@@ -20,6 +20,8 @@ struct PacketWalk {
     alignas(16) float tMax[kPacketWidth];  // ray[l].tMax, for the lane test
     float tMaxAll;                         // the largest of them: the group test's far bound
     bool supported;
+    uint32_t nodeTests, nodeBudget;        // group tests so far, and how many the packet may take
+    bool overBudget;
 };
 
 // After a leaf: each ray's committed t into the packet's bounds.
@@ -44,20 +46,40 @@ static inline void pushPacketChild(PacketStack& s, uint32_t& sp, format::ChildRe
     }
 }
 
-// Walks one structure from `root` for the rays `rootLanes` (in the space of L and f), calling leafFn(ref, lanes, sp)
-// for each leaf some ray enters. The nearest hit child is entered directly, the others pushed farthest first.
-template <typename LeafFn>
+// Below this many rays a subtree is walked by each ray alone: the group test costs as much as a ray's node test and
+// the lane tests more, so a packet of few rays only adds work ("fall back to single rays as lanes die").
+constexpr uint32_t kPacketMinLanes = 4;
+
+// The group tests a packet may take per ray before it is given up and its rays traced alone: a single ray takes
+// some 10-40 node tests on the bench's meshes, so a packet over this budget has cost about what its rays alone
+// would, and goes on costing more (rays that spread wider than the boxes: every node between them passes).
+constexpr uint32_t kPacketNodeBudget = 24;
+
+// Walks one structure from `root` for the rays `rootLanes` (in the space of L and f). The group test picks the
+// children some ray may enter, the lane test which rays do; each child goes on with its rays: a leaf to
+// leafFn(ref, lanes, sp), a subtree with fewer than kPacketMinLanes rays to aloneFn(ref, lanes), the others as a
+// packet, the nearest entered directly and the rest pushed farthest first.
+template <typename LeafFn, typename AloneFn>
 static inline void walkPacket(PacketWalk& p, const format::Node* nodes, const PacketLanes& L, const PacketFrustum& f,
                               format::ChildRef root, uint32_t rootLanes, PacketStack& s, uint32_t base,
-                              const LeafFn& leafFn) {
+                              const LeafFn& leafFn, const AloneFn& aloneFn) {
     uint32_t sp = base;
     pushPacketChild(s, sp, root, f.tMin, rootLanes);
-    while (sp > base && p.supported) {
+    while (sp > base && p.supported && !p.overBudget) {
         --sp;
         format::ChildRef ref = s.ref[sp];
         uint32_t lanes = s.lanes[sp];
         if (s.dist[sp] > p.tMaxAll * kFarSlack) continue;  // behind every ray's committed hit
         while (format::isInternal(ref)) {
+            if (uint32_t(__builtin_popcount(lanes)) < kPacketMinLanes) {
+                aloneFn(ref, lanes);
+                ref = format::kEmptyRef;
+                break;
+            }
+            if (++p.nodeTests > p.nodeBudget) {  // the packet costs more than its rays alone: give up
+                p.overBudget = true;
+                return;
+            }
             const format::Node& node = nodes[format::nodeIndex(ref)];
             float entry[format::kNodeWidth];
             uint32_t mask = groupEntries(node, f, p.tMaxAll, entry);
@@ -69,13 +91,9 @@ static inline void walkPacket(PacketWalk& p, const format::Node* nodes, const Pa
                 const uint32_t i = uint32_t(__builtin_ctz(mask));
                 const format::ChildRef child = node.child[i];
                 if (child == format::kEmptyRef) continue;
-                uint32_t enter = lanes;
-                if (format::isLeaf(child)) {
-                    enter = lanesEntering(node, i, f, L, p.tMin, p.tMax, lanes);
-                    if (enter == 0) continue;
-                } else {
-                    prefetchNode(nodes + format::nodeIndex(child));
-                }
+                const uint32_t enter = lanesEntering(node, i, f, L, p.tMin, p.tMax, lanes);
+                if (enter == 0) continue;
+                if (format::isInternal(child)) prefetchNode(nodes + format::nodeIndex(child));
                 uint32_t k = hits++;  // insertion by descending entry distance: the nearest last
                 while (k > 0 && dist[k - 1] < entry[i]) {
                     dist[k] = dist[k - 1], refs[k] = refs[k - 1], childLanes[k] = childLanes[k - 1];
@@ -95,7 +113,9 @@ static inline void walkPacket(PacketWalk& p, const format::Node* nodes, const Pa
     }
 }
 
-// The triangle leaves of a bottom level: each ray that enters the leaf tests it alone.
+// The triangle leaves of a bottom level: each ray that enters the leaf tests it alone. (Testing each triangle
+// against 8 rays at a time instead was tried and was slower: most rays that enter a leaf miss all its triangles, and
+// the single-ray test stops after one pass for those.)
 struct PacketTriangleLeaves {
     PacketWalk& p;
     const std::byte* records;
@@ -114,6 +134,16 @@ struct PacketInstanceLeaves {
     BlasResolver resolver;
     const format::InstanceRecord* instances;
 
+    // The rays `lanes` each alone through `subtree` of bottom level `blas`, in their object space.
+    void walkAlone(const std::byte* blas, format::ChildRef subtree, uint32_t lanes) const {
+        for (; lanes != 0; lanes &= lanes - 1) {
+            Walk& w = p.ray[__builtin_ctz(lanes)];
+            walkTree(w, format::nodes(blas), w.objectRay, subtree, single, 0,
+                     TriangleLeaves<true>{w, format::records(blas)});
+        }
+        refreshPacketBounds(p);
+    }
+
     void operator()(format::ChildRef leaf, uint32_t lanes, uint32_t sp) const {
         const uint32_t cullMask = p.ray[__builtin_ctz(lanes)].cullMask, flags = p.ray[__builtin_ctz(lanes)].flags;
         for (uint64_t i = format::leafFirst(leaf), end = i + format::leafCount(leaf); i < end; ++i) {
@@ -127,16 +157,12 @@ struct PacketInstanceLeaves {
             PacketLanes L;
             PacketFrustum f;
             const auto objectRay = [&](uint32_t l) -> const ShearedRay& { return p.ray[l].objectRay; };
-            if ((lanes & (lanes - 1)) != 0 && packetFrustum(objectRay, lanes, p.tMin, L, f)) {
+            if (uint32_t(__builtin_popcount(lanes)) >= kPacketMinLanes && packetFrustum(objectRay, lanes, p.tMin, L, f)) {
                 walkPacket(p, format::nodes(blas), L, f, h->root, lanes, stack, sp,
-                           PacketTriangleLeaves{p, format::records(blas)});
+                           PacketTriangleLeaves{p, format::records(blas)},
+                           [&](format::ChildRef subtree, uint32_t alone) { walkAlone(blas, subtree, alone); });
             } else {
-                for (uint32_t m = lanes; m != 0; m &= m - 1) {
-                    Walk& w = p.ray[__builtin_ctz(m)];
-                    walkTree(w, format::nodes(blas), w.objectRay, h->root, single, 0,
-                             TriangleLeaves<true>{w, format::records(blas)});
-                }
-                refreshPacketBounds(p);
+                walkAlone(blas, h->root, lanes);
             }
         }
     }
@@ -155,6 +181,9 @@ static bool tracePacketWith(const std::byte* topLevel, BlasResolver resolver, co
     PacketWalk p;
     p.lanes = (1u << count) - 1u;
     p.supported = true;
+    p.nodeTests = 0;
+    p.nodeBudget = kPacketNodeBudget * count;
+    p.overBudget = false;
     for (uint32_t l = 0; l < count; ++l) {
         startWalk(p.ray[l], rays[l], hits[l]);
         p.tMin[l] = rays[l].tMin;
@@ -169,9 +198,19 @@ static bool tracePacketWith(const std::byte* topLevel, BlasResolver resolver, co
     PacketFrustum f;
     const auto worldRay = [&](uint32_t l) -> const ShearedRay& { return p.ray[l].worldRay; };
     if (!packetFrustum(worldRay, p.lanes, p.tMin, L, f)) return false;
+    // A top-level subtree that few rays enter: each walks it alone, with the single-ray kernel's instance leaves (a
+    // bottom level that the kernel does not cover sets `supported`, and the whole packet is traced again alone).
+    const auto topAlone = [&](format::ChildRef subtree, uint32_t lanes) {
+        for (; lanes != 0 && p.supported; lanes &= lanes - 1) {
+            Walk& w = p.ray[__builtin_ctz(lanes)];
+            walkTree(w, format::nodes(topLevel), w.worldRay, subtree, s.single, 0,
+                     InstanceLeaves<true>{w, s.single, resolver, format::instances(topLevel), p.supported});
+        }
+        refreshPacketBounds(p);
+    };
     walkPacket(p, format::nodes(topLevel), L, f, top->root, p.lanes, s.stack, 0,
-               PacketInstanceLeaves{p, s.stack, s.single, resolver, format::instances(topLevel)});
-    if (!p.supported) return false;
+               PacketInstanceLeaves{p, s.stack, s.single, resolver, format::instances(topLevel)}, topAlone);
+    if (!p.supported || p.overBudget) return false;
     for (uint32_t l = 0; l < count; ++l)
         if (p.ray[l].tied) tied |= 1u << l;
     return true;
