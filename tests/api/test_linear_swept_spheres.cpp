@@ -565,6 +565,46 @@ TEST_F(linear_swept_spheres_exact, chained_successive_caps) {
     EXPECT_TRUE(takeValidationErrors().empty());
 }
 
+TEST_F(linear_swept_spheres_exact, chained_joint_at_zero_radius) {
+    // Found by the random oracle test (successive_chained, seed 12134944698334637567): two chained segments
+    // meet at a vertex of radius 0, so primitive 1 is a cone from an apex and has no leading cap. The ray passes
+    // 5.5e-9 from the apex (closer than primitive 0 reaches: it grazes that) and enters primitive 1's midsection
+    // at u = 3.6e-8. That is a hit, not an entry through the absent cap (a point here), and the oracle must
+    // accept it.
+    SweptSpec s;
+    s.lss = true;
+    s.positions = {{0x1.25468ep-1, -0x1.e66666p-1, 0x1.e66666p-1},
+                   {0x1.45ce12p-2, -0x1.61e74ap-1, 0x1.e66666p-1},
+                   {0x1.cc971ep-2, -0x1.459f6ap-1, 0x1.5df09cp-1}};
+    s.radii = {0x1.064896p-3f, 0.0f, 0x1.1f575cp-3f};
+    s.indices = {0, 1};
+    s.indexType = VK_INDEX_TYPE_UINT32;
+    s.indexingMode = VK_RAY_TRACING_LSS_INDEXING_MODE_SUCCESSIVE_NV;
+    s.endCapsMode = VK_RAY_TRACING_LSS_PRIMITIVE_END_CAPS_MODE_CHAINED_NV;
+    s.primitiveCount = 2;
+    data_.push_back(makeSwept(s));
+    AccelStruct* blas = buildSwept({data_.back().get()});
+    Instance inst;
+    inst.blas = blas;
+    const float m[3][4] = {{-0x1.184158p-1f, 0x1.4bbd36p-3f, 0x1.32a914p-1f, 0x1.240132p+1f},
+                           {-0x1.6c0012p-3f, -0x1.11ef2cp+0f, -0x1.3d6524p-3f, -0x1.1a7d9ap+0f},
+                           {0x1.5cbd34p-2f, -0x1.31400ap-2f, 0x1.c37818p-1f, 0x1.a0fcb2p+0f}};
+    std::memcpy(inst.transform.matrix, m, sizeof m);
+    AccelStruct* tlas = buildTlas({inst});
+    oracle::Ray ray;
+    ray.origin = {0x1.058ce2p+2f, -0x1.368996p-1f, 0x1.ea617p+1f};
+    ray.direction = {-0x1.b75a18p+0f, 0x1.673886p-5f, -0x1.2f084cp+0f};
+    ray.tMin = 0;
+    ray.tMax = INFINITY;
+    const Hit h = traceClosest(tlas, ray);
+    EXPECT_EQ(h.primitiveIndex, 1);
+    EXPECT_NEAR(h.t, 0.88716, 1e-5);
+    for (uint32_t flags : {0u, VKAS_RAY_FLAG_OPAQUE, VKAS_RAY_FLAG_NO_OPAQUE, VKAS_RAY_FLAG_TERMINATE_ON_FIRST_HIT})
+        checkRays(tlas, {ray}, flags, 0xFF);
+    checkGetters(tlas, {ray}, 0);
+    EXPECT_TRUE(takeValidationErrors().empty());
+}
+
 // ---- random scenes against the oracle -----------------------------------------------------------------------------
 struct SceneParam {
     bool lss;

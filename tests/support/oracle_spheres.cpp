@@ -88,6 +88,23 @@ double phi(const Vec3& x, const SweptPrimitive& sp, double* argmin = nullptr) {
 
 Vec3 at(const Vec3& o, const Vec3& d, double t) { return {o[0] + t * d[0], o[1] + t * d[1], o[2] + t * d[2]}; }
 
+// Distance from x to the circle where end cap k meets the midsection. End sphere k (centre c, radius r, the other
+// end at c + e with radius r + dr) is the nearest sphere where d/ds (|x - c(s)| - r(s)) >= 0 at the end, i.e.
+// (x - c).e <= -r dr: the junction is the circle at axial offset h = -r dr / |e| with radius sqrt(r^2 - h^2). It
+// is a point when r = 0 (a cone's apex) and absent for a self-enclosing LSS (the cap is the whole surface).
+double junctionDistance(const Vec3& x, const SweptPrimitive& sp, int k) {
+    const Vec3& c = sp.p[k];
+    const double r = sp.r[k], dr = sp.r[1 - k] - r;
+    Vec3 e, w;
+    double ee = 0;
+    for (int i = 0; i < 3; ++i) e[i] = sp.p[1 - k][i] - c[i], w[i] = x[i] - c[i], ee += e[i] * e[i];
+    if (!(ee > dr * dr)) return std::numeric_limits<double>::infinity();
+    const double len = std::sqrt(ee), h = -r * dr / len, rho = std::sqrt(std::max(0.0, r * r - h * h));
+    const double axial = (w[0] * e[0] + w[1] * e[1] + w[2] * e[2]) / len;
+    const double radial = std::sqrt(std::max(0.0, w[0] * w[0] + w[1] * w[1] + w[2] * w[2] - axial * axial));
+    return std::hypot(axial - h, radial - rho);
+}
+
 }  // namespace
 
 Geometry fetchSweptSpheres(const VkAccelerationStructureGeometryKHR& geometry,
@@ -229,16 +246,25 @@ void sweptCandidates(const Geometry& geometry, const Vec3& o, const Vec3& d, dou
         const bool graze = phiMin > -delta || slope < 1e-3 * dlen;
         const double tTol = kRel * std::fabs(tEntry) + (graze ? (tb - ta) : 4 * delta / std::max(slope, 1e-300));
         const bool isLss = geometry.type == VK_GEOMETRY_TYPE_LINEAR_SWEPT_SPHERES_NV;
-        // End caps: entering through an absent cap gives no hit; near a cap/midsection junction it is optional.
+        // End caps. Spec: "For rays that originate inside a LSS or sphere primitive, or enter through an absent
+        // endcap, no intersections will be reported", and "If the u value is exactly 0 or 1, then the intersection
+        // occurred on the respective endcap". Near a cap/midsection junction it is optional. u cannot tell how far
+        // the entry is from the junction (it is 0 all over the cap and grows from 0 on the midsection), so a
+        // clear entry through the cap also needs the entry point farther from the junction than the position
+        // error: a ray that passes an end of radius 0 within that error enters the midsection there, at u > 0.
         bool capOptional = false;
         if (isLss) {
             const double uTol = 1e-5 + 1e-3 * (graze ? 1.0 : 0.0);
-            if ((u < 1e-7 && !sp.cap[0]) || (u > 1 - 1e-7 && !sp.cap[1])) {
-                if (!graze) continue;  // clearly through an absent cap
-                capOptional = true;
-            } else if ((u < uTol && !sp.cap[0]) || (u > 1 - uTol && !sp.cap[1])) {
-                capOptional = true;
+            const Vec3 x = at(o, d, tEntry);
+            const double posTol = 4 * delta + tTol * dlen;
+            bool clearlyCap = false;
+            for (int k = 0; k < 2; ++k) {
+                const double toEnd = k == 0 ? u : 1 - u;
+                if (sp.cap[k] || !(toEnd < uTol)) continue;
+                if (toEnd < 1e-7 && !graze && junctionDistance(x, sp, k) > posTol) clearlyCap = true;
+                else capOptional = true;
             }
+            if (clearlyCap) continue;  // clearly through an absent cap
         }
         // A ray starting inside (entry before tMin) or reaching the shape after tMax: no hit.
         if (tEntry < tMin - tTol || tEntry > tMax + tTol) continue;
