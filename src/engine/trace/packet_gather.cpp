@@ -5,6 +5,7 @@
 #include <cstring>
 
 #include "engine/trace/hit_rules.hpp"
+#include "engine/trace/ray.hpp"
 
 namespace vkas {
 
@@ -23,7 +24,7 @@ uint32_t groupOf(const KernelRay& r) {
     constexpr float kLo = 0x1p-126f, kHi = 0x1p126f;
     if (!(ax >= kLo && ax <= kHi && ay >= kLo && ay <= kHi && az >= kLo && az <= kHi)) return kAlone;
     const uint32_t octant = (x < 0.0f ? 1u : 0u) | (y < 0.0f ? 2u : 0u) | (z < 0.0f ? 4u : 0u);
-    const uint32_t dominant = ax > ay ? (ax > az ? 0u : 2u) : (ay > az ? 1u : 2u);
+    const uint32_t dominant = uint32_t(dominantAxis(ax, ay, az));  // the shear's kz: a packet's rays share it
     return octant * 3 + dominant;
 }
 

@@ -14,6 +14,10 @@ struct ShearedRay {
     float sx, sy, sz;
 };
 
+// The axis of the largest direction component (|d| per axis), the watertight test's kz; ties go to the later axis
+// of each comparison, as the shear has always chosen.
+inline int dominantAxis(float ax, float ay, float az) { return (ax > ay) ? (ax > az ? 0 : 2) : (ay > az ? 1 : 2); }
+
 inline void prepareShearedRay(ShearedRay& r, const float org[3], const float dir[3]) {
     for (int i = 0; i < 3; ++i) {
         r.org[i] = org[i];
@@ -21,7 +25,7 @@ inline void prepareShearedRay(ShearedRay& r, const float org[3], const float dir
         r.invDir[i] = 1.0f / dir[i];
     }
     float ax = std::fabs(dir[0]), ay = std::fabs(dir[1]), az = std::fabs(dir[2]);
-    r.kz = (ax > ay) ? (ax > az ? 0 : 2) : (ay > az ? 1 : 2);
+    r.kz = dominantAxis(ax, ay, az);
     r.kx = (r.kz + 1) % 3;
     r.ky = (r.kx + 1) % 3;
     if (dir[r.kz] < 0.0f) {  // keep the winding of the sheared triangle
