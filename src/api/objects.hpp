@@ -16,6 +16,7 @@ enum class ObjectMagic : uint32_t {
     Buffer = 0x42554631,                 // "BUF1"
     AccelerationStructure = 0x41435331,  // "ACS1"
     DeferredOperation = 0x44464F31,      // "DFO1"
+    Micromap = 0x4D4D5031,               // "MMP1"
     Dead = 0xDEADDEAD,
 };
 
@@ -54,6 +55,24 @@ struct AccelerationStructure {
     VkAllocationCallbacks allocator{};  // the pAllocator of vkCreateAccelerationStructureKHR (zero: none)
 
     // The structure's block: where its bytes live, or nullptr while its buffer has no memory.
+    std::byte* block() const {
+        std::byte* base = buffer ? buffer->hostAddress() : nullptr;
+        return base ? base + offset : nullptr;
+    }
+};
+
+// VK_EXT_opacity_micromap: a micromap lives in a buffer like an acceleration structure (engine/format/micromap_layout.hpp).
+struct Micromap {
+    ObjectMagic magic = ObjectMagic::Micromap;
+    Device* device = nullptr;
+    Buffer* buffer = nullptr;
+    VkDeviceSize offset = 0;
+    VkDeviceSize size = 0;
+    VkMicromapTypeEXT type = VK_MICROMAP_TYPE_OPACITY_MICROMAP_EXT;
+    VkMicromapCreateFlagsEXT createFlags = 0;
+    bool constructed = false;  // a build or copy has written it
+    VkAllocationCallbacks allocator{};  // the pAllocator of vkCreateMicromapEXT (zero: none)
+
     std::byte* block() const {
         std::byte* base = buffer ? buffer->hostAddress() : nullptr;
         return base ? base + offset : nullptr;
