@@ -1,4 +1,5 @@
 #include "api/device.hpp"
+#include "engine/format/micromap_layout.hpp"
 
 #include "api/deferred_operation.hpp"
 #include "api/guard.hpp"
@@ -159,6 +160,14 @@ const std::byte* resolveAccelerationStructure(uint64_t reference) {
     if (!as || as->magic != ObjectMagic::AccelerationStructure) return nullptr;
     const std::byte* block = as->block();
     if (!block || format::header(block)->magic != format::kMagic) return nullptr;  // never built
+    return block;
+}
+
+const std::byte* resolveMicromap(uint64_t micromap) {
+    auto* m = reinterpret_cast<const Micromap*>(micromap);
+    if (!m || m->magic != ObjectMagic::Micromap || !m->constructed) return nullptr;
+    const std::byte* block = m->block();
+    if (!block || format::micromapHeader(block)->magic != format::kMicromapMagic) return nullptr;
     return block;
 }
 
