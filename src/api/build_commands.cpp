@@ -6,6 +6,7 @@
 
 #include "api/deferred_operation.hpp"
 #include "api/device.hpp"
+#include "api/micromap.hpp"
 #include "api/entry_points.hpp"
 #include "api/guard.hpp"
 #include "api/validate/build_infos.hpp"

@@ -65,8 +65,6 @@ private:
 
 // The block of the bottom-level structure an instance's accelerationStructureReference names (or nullptr).
 const std::byte* resolveAccelerationStructure(uint64_t reference);
-// [EXT-OMM] The block of the constructed micromap a VkMicromapEXT handle names (validation has checked the handle),
-// or nullptr: what bottom-level builds read micromaps through (engine/format/micromap_layout.hpp, MicromapResolver).
-const std::byte* resolveMicromap(uint64_t micromap);
+
 
 }  // namespace vkas

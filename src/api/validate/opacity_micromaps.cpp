@@ -5,6 +5,7 @@
 #include <utility>
 
 #include "api/device.hpp"
+#include "api/micromap.hpp"
 #include "api/objects.hpp"
 #include "api/validate/parameters.hpp"
 #include "engine/format/micromap_layout.hpp"
