@@ -13,6 +13,7 @@ namespace {
 constexpr uint32_t kRayOpaque = 0x1, kRayNoOpaque = 0x2, kRayCullBack = 0x10, kRayCullFront = 0x20,
                    kRayCullOpaque = 0x40, kRayCullNoOpaque = 0x80, kRaySkipTriangles = 0x100, kRaySkipAabbs = 0x200;
 constexpr uint32_t kInstCullDisable = 0x1, kInstFlip = 0x2, kInstForceOpaque = 0x4, kInstForceNoOpaque = 0x8;
+constexpr uint32_t kInstForceOmm2State = 0x10, kInstDisableOmm = 0x20, kRayForceOmm2State = 0x400;  // [EXT-OMM]
 
 template <typename T>
 T load(const uint8_t* p) {
@@ -216,6 +217,7 @@ Geometry fetchTriangles(const VkAccelerationStructureGeometryKHR& geometry,
             for (int k = 0; k < 3; ++k) t.v[j][k] = roundToFloat(p[k]);
         }
     }
+    out.micromap = fetchGeometryMicromap(tri, range.primitiveCount);
     return out;
 }
 
@@ -477,13 +479,26 @@ Result trace(const Scene& scene, const Ray& ray, uint32_t rayFlags, uint32_t cul
 
         for (size_t gi = 0; gi < inst.blas->geometries.size(); ++gi) {
             const Geometry& geom = inst.blas->geometries[gi];
-            bool opaque = geom.opaque;
-            if (inst.flags & kInstForceOpaque) opaque = true;
-            if (inst.flags & kInstForceNoOpaque) opaque = false;
-            if (rayFlags & kRayOpaque) opaque = true;
-            if (rayFlags & kRayNoOpaque) opaque = false;
-            if ((rayFlags & kRayCullOpaque) && opaque) continue;
-            if ((rayFlags & kRayCullNoOpaque) && !opaque) continue;
+            // Opacity: the geometry's (or, per candidate below, its micromap's), then the instance's and the ray's
+            // overrides, then the culls.
+            auto resolve = [&](bool geometryOpaque) {
+                bool opaque = geometryOpaque;
+                if (inst.flags & kInstForceOpaque) opaque = true;
+                if (inst.flags & kInstForceNoOpaque) opaque = false;
+                if (rayFlags & kRayOpaque) opaque = true;
+                if (rayFlags & kRayNoOpaque) opaque = false;
+                return opaque;
+            };
+            auto culled = [&](bool opaque) {
+                return ((rayFlags & kRayCullOpaque) && opaque) || ((rayFlags & kRayCullNoOpaque) && !opaque);
+            };
+            const bool opaque = resolve(geom.opaque);
+            // [EXT-OMM] "If the intersection candidate is with a geometry with an associated opacity micromap and
+            // VK_GEOMETRY_INSTANCE_DISABLE_OPACITY_MICROMAPS_BIT_KHR is not set in its instance then the micromap is
+            // used to determine geometry opacity instead of the VK_GEOMETRY_OPAQUE_BIT_KHR flag in the geometry."
+            const bool micromapDecides = geom.micromap && !(inst.flags & kInstDisableOmm);
+            const bool force2State = (inst.flags & kInstForceOmm2State) || (rayFlags & kRayForceOmm2State);
+            if (!micromapDecides && culled(opaque)) continue;
 
             if (geom.type == VK_GEOMETRY_TYPE_AABBS_KHR) {
                 if (rayFlags & kRaySkipAabbs) continue;
@@ -562,6 +577,29 @@ Result trace(const Scene& scene, const Ray& ray, uint32_t rayFlags, uint32_t cul
                     const bool cullThis = ((rayFlags & kRayCullBack) && !front) || ((rayFlags & kRayCullFront) && front);
                     if (cullThis && !facingAmbiguous) continue;
                 }
+                bool candidateOpaque = opaque, opacityAmbiguous = false;
+                if (micromapDecides) {
+                    // Every outcome the micromap may give within the barycentrics' tolerance: a candidate that some
+                    // of them ignore or cull is optional; one that all of them drop is none.
+                    bool anyKept = false, anyDropped = false, opacityKnown = true, first = true;
+                    for (const Opacity o : micromapOutcomes(*geom.micromap, pi, x.bary[1], x.bary[2], x.baryTolerance,
+                                                            force2State)) {
+                        // "If the result of the opacity micromap operation is ignored, the candidate is considered
+                        // neither opaque or non-opaque and execution instead proceeds with enumerating the next
+                        // candidate."
+                        const bool kept = o != Opacity::Ignored && !culled(resolve(o == Opacity::Opaque));
+                        if (!kept) {
+                            anyDropped = true;
+                            continue;
+                        }
+                        const bool op = resolve(o == Opacity::Opaque);
+                        if (!first && op != candidateOpaque) opacityKnown = false;
+                        candidateOpaque = op, first = false, anyKept = true;
+                    }
+                    if (!anyKept) continue;
+                    if (anyDropped || !opacityKnown) optional = true;
+                    opacityAmbiguous = !opacityKnown;
+                }
                 Candidate c;
                 c.t = x.t;
                 c.bary[0] = x.bary[1];
@@ -573,7 +611,8 @@ Result trace(const Scene& scene, const Ray& ray, uint32_t rayFlags, uint32_t cul
                 c.sbtOffset = inst.sbtOffset;
                 c.frontFace = front;
                 c.facingAmbiguous = facingAmbiguous;
-                c.opaque = opaque;
+                c.opaque = candidateOpaque;
+                c.opacityAmbiguous = opacityAmbiguous;
                 c.optional = optional;
                 c.tTolerance = x.tTolerance;
                 c.baryTolerance = x.baryTolerance;

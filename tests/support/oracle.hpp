@@ -6,6 +6,8 @@
 #include <vkas/vkas_compat.h>  // VK_NV_ray_tracing_linear_swept_spheres on older headers
 #include <vulkan/vulkan_core.h>
 
+#include "oracle_micromap.hpp"
+
 #include <array>
 #include <cstdint>
 #include <functional>
@@ -63,6 +65,7 @@ struct SweptPrimitive {
 struct Geometry {
     VkGeometryTypeKHR type = VK_GEOMETRY_TYPE_TRIANGLES_KHR;
     bool opaque = false;
+    std::shared_ptr<const GeometryMicromap> micromap;  // [EXT-OMM] triangle geometries with an opacity micromap
     std::vector<Triangle> triangles;  // triangle geometries; index = primitive index
     std::vector<Aabb> aabbs;          // AABB geometries; index = primitive index
     std::vector<SweptPrimitive> swept;  // sphere and LSS geometries; index = primitive index
@@ -121,6 +124,7 @@ struct Candidate {
     bool frontFace = false;
     bool facingAmbiguous = false;  // nearly edge-on: facing may come out either way in float
     bool opaque = false;
+    bool opacityAmbiguous = false;  // [EXT-OMM] near a micro-edge between states of different opacity: either
     // Optional: the ray passes within the tolerance margin of an edge, of tMin/tMax, or of edge-on, so an
     // implementation may report it or not. Required candidates must be found.
     bool optional = false;

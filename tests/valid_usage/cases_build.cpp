@@ -354,7 +354,7 @@ void addBuildCases(std::vector<Case>& c) {
     });
     CASE("VUID-VkAccelerationStructureBuildGeometryInfoKHR-flags-parameter", {
         auto pb = t.triangleBuild();
-        pb->info.flags |= 0x40;  // an opacity-micromap bit: its extension is not enabled
+        pb->info.flags |= 0x200;  // ALLOW_DISPLACEMENT_MICROMAP_UPDATE_NV: its extension is not enabled
         run(t, *pb);
         (void)vk;
         (void)dev;

@@ -195,6 +195,232 @@ const VkMemoryBarrier kStray{VK_STRUCTURE_TYPE_MEMORY_BARRIER};  // a structure 
 
 }  // namespace
 
+
+// A micromap of two 4-state level-6 triangles (1 KiB of states each) and its usage count.
+struct MicromapSource {
+    VkMicromapEXT micromap;
+    VkMicromapUsageEXT* usage;
+};
+MicromapSource bigMicromap(Fixture& t) {
+    VkMicromapUsageEXT* usage = t.hostObject(VkMicromapUsageEXT{2, 6, VK_OPACITY_MICROMAP_FORMAT_4_STATE_EXT});
+    const VkMicromapTriangleEXT tris[2] = {{0, 6, VK_OPACITY_MICROMAP_FORMAT_4_STATE_EXT},
+                                           {1024, 6, VK_OPACITY_MICROMAP_FORMAT_4_STATE_EXT}};
+    auto* triangles = reinterpret_cast<VkMicromapTriangleEXT*>(t.hostCopy(tris, sizeof tris));
+    uint8_t* data = t.hostCopy(nullptr, 2048);
+    std::memset(data, 0x5A, 2048);
+    VkMicromapBuildInfoEXT info{VK_STRUCTURE_TYPE_MICROMAP_BUILD_INFO_EXT};
+    info.type = VK_MICROMAP_TYPE_OPACITY_MICROMAP_EXT;
+    info.mode = VK_BUILD_MICROMAP_MODE_BUILD_EXT;
+    info.usageCountsCount = 1;
+    info.pUsageCounts = usage;
+    info.data.hostAddress = data;
+    info.triangleArray.hostAddress = triangles;
+    info.triangleArrayStride = sizeof(VkMicromapTriangleEXT);
+    info.dstMicromap = newMicromap(t);
+    EXPECT_EQ(mmOf(t.device).build(t.device, VK_NULL_HANDLE, 1, &info), VK_SUCCESS);
+    return {info.dstMicromap, usage};
+}
+
+// ---- [EXT-OMM] Triangle geometries with an opacity micromap --------------------------------------------------------
+
+// A valid build of the fixture's quad (2 triangles) with an opacity micromap of builtMicromap's 3 triangles: UINT32
+// indices {0, 1} (both 2-state, level 1). `edit` changes the structure before the build is prepared; `flags` are the
+// build's.
+struct OmmBuild {
+    VkAccelerationStructureTrianglesOpacityMicromapEXT* omm;
+    VkMicromapUsageEXT* usage;
+    uint32_t* indices;
+    std::unique_ptr<vt::PreparedBuild> pb;
+};
+OmmBuild ommBuild(Fixture& t, VkBuildAccelerationStructureFlagsKHR flags = 0) {
+    OmmBuild b;
+    const uint32_t indices[2] = {0, 1};
+    b.indices = reinterpret_cast<uint32_t*>(t.hostCopy(indices, sizeof indices));
+    b.usage = t.hostObject(VkMicromapUsageEXT{2, 1, VK_OPACITY_MICROMAP_FORMAT_2_STATE_EXT});
+    VkAccelerationStructureTrianglesOpacityMicromapEXT o{
+        VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_TRIANGLES_OPACITY_MICROMAP_EXT};
+    o.indexType = VK_INDEX_TYPE_UINT32;
+    o.indexBuffer.hostAddress = b.indices;
+    o.indexStride = 4;
+    o.usageCountsCount = 1;
+    o.pUsageCounts = b.usage;
+    o.micromap = builtMicromap(t);
+    b.omm = t.hostObject(o);
+    VkAccelerationStructureGeometryKHR g = t.tri->geometry;
+    g.geometry.triangles.pNext = b.omm;
+    vt::BuildOptions opt;
+    opt.flags = flags;
+    b.pb = t.prepareBlas(std::vector<VkAccelerationStructureGeometryKHR>{g},
+                         std::vector<VkAccelerationStructureBuildRangeInfoKHR>{t.tri->range}, opt);
+    t.watch(b.pb->scratch.data(), b.pb->scratch.size());
+    return b;
+}
+void runBuild(Fixture& t, vt::PreparedBuild& pb) {
+    t.call([&] { return t.build(pb); });
+}
+// An in-place update of a structure built by ommBuild with `flags` (ALLOW_UPDATE added).
+OmmBuild ommUpdate(Fixture& t, VkBuildAccelerationStructureFlagsKHR flags) {
+    OmmBuild b = ommBuild(t, flags | VK_BUILD_ACCELERATION_STRUCTURE_ALLOW_UPDATE_BIT_KHR);
+    EXPECT_EQ(t.build(*b.pb).result, VK_SUCCESS);
+    b.pb->info.mode = VK_BUILD_ACCELERATION_STRUCTURE_MODE_UPDATE_KHR;
+    b.pb->info.srcAccelerationStructure = b.pb->as->handle;
+    b.pb->info.scratchData.hostAddress = nullptr;
+    return b;
+}
+
+void addOpacityGeometryCases(std::vector<Case>& c) {
+    CASE("VUID-VkAccelerationStructureTrianglesOpacityMicromapEXT-pUsageCounts-07335", {
+        OmmBuild b = ommBuild(t);
+        const VkMicromapUsageEXT* pointers[1] = {b.usage};
+        b.omm->ppUsageCounts = reinterpret_cast<const VkMicromapUsageEXT* const*>(t.hostCopy(pointers, sizeof pointers));
+        runBuild(t, *b.pb);
+        (void)vk, (void)dev;
+    });
+    CASE("VUID-VkAccelerationStructureTrianglesOpacityMicromapEXT-pUsageCounts-parameter", {
+        OmmBuild b = ommBuild(t);
+        b.omm->pUsageCounts = nullptr;
+        b.omm->micromap = VK_NULL_HANDLE;  // (no usage to count: the indices are special)
+        b.indices[0] = b.indices[1] = uint32_t(-2);
+        runBuild(t, *b.pb);
+        (void)vk, (void)dev;
+    });
+    CASE("VUID-VkAccelerationStructureTrianglesOpacityMicromapEXT-ppUsageCounts-parameter", {
+        OmmBuild b = ommBuild(t);
+        const VkMicromapUsageEXT* pointers[1] = {nullptr};
+        b.omm->pUsageCounts = nullptr;
+        b.omm->ppUsageCounts = reinterpret_cast<const VkMicromapUsageEXT* const*>(t.hostCopy(pointers, sizeof pointers));
+        b.omm->micromap = VK_NULL_HANDLE;
+        b.indices[0] = b.indices[1] = uint32_t(-2);
+        runBuild(t, *b.pb);
+        (void)vk, (void)dev;
+    });
+    CASE("VUID-VkAccelerationStructureTrianglesOpacityMicromapEXT-indexType-10719", {
+        OmmBuild b = ommBuild(t);
+        b.omm->indexType = VkIndexType(1000265000);  // VK_INDEX_TYPE_UINT8
+        runBuild(t, *b.pb);
+        (void)vk, (void)dev;
+    });
+    CASE("VUID-VkAccelerationStructureTrianglesOpacityMicromapEXT-indexType-10722", {
+        OmmBuild b = ommBuild(t);
+        b.omm->indexStride = 6;
+        runBuild(t, *b.pb);
+        (void)vk, (void)dev;
+    });
+    CASE("VUID-VkAccelerationStructureTrianglesOpacityMicromapEXT-indexType-10723", {
+        OmmBuild b = ommBuild(t);
+        b.omm->indexStride = 0x2'0000'0000ull;
+        runBuild(t, *b.pb);
+        (void)vk, (void)dev;
+    });
+    CASE("VUID-VkAccelerationStructureTrianglesOpacityMicromapEXT-format-11679", {
+        OmmBuild b = ommBuild(t);
+        b.usage->format = 3;
+        runBuild(t, *b.pb);
+        (void)vk, (void)dev;
+    });
+    CASE("VUID-VkAccelerationStructureTrianglesOpacityMicromapEXT-subdivisionLevel-11680", {
+        OmmBuild b = ommBuild(t);
+        b.usage->subdivisionLevel = 13;
+        runBuild(t, *b.pb);
+        (void)vk, (void)dev;
+    });
+    CASE("VUID-VkAccelerationStructureTrianglesOpacityMicromapEXT-subdivisionLevel-11681", {
+        OmmBuild b = ommBuild(t);
+        b.usage->format = VK_OPACITY_MICROMAP_FORMAT_4_STATE_EXT;
+        b.usage->subdivisionLevel = 13;
+        runBuild(t, *b.pb);
+        (void)vk, (void)dev;
+    });
+    CASE("VUID-VkAccelerationStructureTrianglesOpacityMicromapEXT-micromap-parameter", {
+        OmmBuild b = ommBuild(t);
+        b.omm->micromap = t.bogus<VkMicromapEXT>();
+        runBuild(t, *b.pb);
+        (void)vk, (void)dev;
+    });
+    CASE_V("VUID-VkAccelerationStructureTrianglesOpacityMicromapEXT-micromap-parameter", "other_device", {
+        OmmBuild b = ommBuild(t);
+        b.omm->micromap = otherMicromap(t);
+        runBuild(t, *b.pb);
+        (void)vk, (void)dev;
+    });
+    CASE("VUID-VkAccelerationStructureTrianglesOpacityMicromapEXT-micromap-vkasConstructed", {
+        OmmBuild b = ommBuild(t);
+        b.omm->micromap = newMicromap(t);
+        runBuild(t, *b.pb);
+        (void)vk, (void)dev;
+    });
+    CASE("VUID-VkAccelerationStructureTrianglesOpacityMicromapEXT-micromap-vkasIndex", {
+        OmmBuild b = ommBuild(t);
+        b.indices[1] = 5;  // the micromap has 3 triangles
+        runBuild(t, *b.pb);
+        (void)vk, (void)dev;
+    });
+    CASE_V("VUID-VkAccelerationStructureTrianglesOpacityMicromapEXT-micromap-vkasIndex", "base_triangle", {
+        OmmBuild b = ommBuild(t);
+        b.omm->baseTriangle = 2;  // 1 + 2 is past the last
+        runBuild(t, *b.pb);
+        (void)vk, (void)dev;
+    });
+    CASE("VUID-VkAccelerationStructureTrianglesOpacityMicromapEXT-micromap-vkasSpecial", {
+        OmmBuild b = ommBuild(t);
+        b.omm->micromap = VK_NULL_HANDLE;
+        b.indices[0] = uint32_t(-1);  // triangle 1 still names micromap triangle 1
+        runBuild(t, *b.pb);
+        (void)vk, (void)dev;
+    });
+    CASE("VUID-VkAccelerationStructureTrianglesOpacityMicromapEXT-pUsageCounts-vkasCounts", {
+        OmmBuild b = ommBuild(t);
+        b.usage->count = 1;  // two triangles use 2-state level-1 micromap triangles
+        runBuild(t, *b.pb);
+        (void)vk, (void)dev;
+    });
+    CASE("VUID-vkBuildAccelerationStructuresKHR-pInfos-10892", {
+        OmmBuild b = ommBuild(t);
+        b.omm->indexType = VK_INDEX_TYPE_NONE_KHR;  // indexBuffer still set
+        runBuild(t, *b.pb);
+        (void)vk, (void)dev;
+    });
+    CASE("VUID-vkBuildAccelerationStructuresKHR-pInfos-11821", {
+        OmmBuild b = ommBuild(t);
+        b.omm->indexBuffer.hostAddress = nullptr;
+        runBuild(t, *b.pb);
+        (void)vk, (void)dev;
+    });
+    CASE("VUID-VkAccelerationStructureBuildGeometryInfoKHR-flags-11558", {
+        OmmBuild b = ommBuild(t);
+        b.pb->info.flags |= VK_BUILD_ACCELERATION_STRUCTURE_ALLOW_OPACITY_MICROMAP_UPDATE_EXT |
+                            VK_BUILD_ACCELERATION_STRUCTURE_ALLOW_OPACITY_MICROMAP_DATA_UPDATE_EXT;
+        runBuild(t, *b.pb);
+        (void)vk, (void)dev;
+    });
+    CASE("VUID-VkAccelerationStructureTrianglesOpacityMicromapEXT-micromap-vkasPresence", {
+        OmmBuild b = ommUpdate(t, VK_BUILD_ACCELERATION_STRUCTURE_ALLOW_OPACITY_MICROMAP_UPDATE_EXT);
+        b.pb->geometries[0].geometry.triangles.pNext = nullptr;  // the update drops the micromap
+        runBuild(t, *b.pb);
+        (void)vk, (void)dev;
+    });
+    CASE("VUID-VkAccelerationStructureTrianglesOpacityMicromapEXT-micromap-vkasDataUpdate", {
+        OmmBuild b = ommUpdate(t, VK_BUILD_ACCELERATION_STRUCTURE_ALLOW_OPACITY_MICROMAP_DATA_UPDATE_EXT);
+        b.indices[1] = 2;  // a 4-state level-2 triangle instead of a 2-state level-1 one
+        const VkMicromapUsageEXT usage[2] = {{1, 1, VK_OPACITY_MICROMAP_FORMAT_2_STATE_EXT},
+                                             {1, 2, VK_OPACITY_MICROMAP_FORMAT_4_STATE_EXT}};
+        b.omm->pUsageCounts = reinterpret_cast<const VkMicromapUsageEXT*>(t.hostCopy(usage, sizeof usage));
+        b.omm->usageCountsCount = 2;
+        runBuild(t, *b.pb);
+        (void)vk, (void)dev;
+    });
+    CASE_V("VUID-vkBuildAccelerationStructuresKHR-pInfos-10126", "opacity_micromap_update", {
+        OmmBuild b = ommUpdate(t, VK_BUILD_ACCELERATION_STRUCTURE_ALLOW_OPACITY_MICROMAP_UPDATE_EXT);
+        // A bigger micromap than the build's usage counts kept room for: two level-6 4-state triangles.
+        MicromapSource big = bigMicromap(t);
+        b.omm->micromap = big.micromap;
+        b.indices[0] = 0, b.indices[1] = 1;
+        b.omm->pUsageCounts = big.usage;
+        runBuild(t, *b.pb);
+        (void)vk, (void)dev;
+    });
+}
+
 void addMicromapCases(std::vector<Case>& c) {
     // ---- vkCreateMicromapEXT, VkMicromapCreateInfoEXT -----------------------------------------------------------
     CASE("VUID-vkCreateMicromapEXT-device-parameter", {
@@ -885,6 +1111,7 @@ void addMicromapCases(std::vector<Case>& c) {
         compatibility(t, vi);
         (void)vk, (void)dev;
     });
+    addOpacityGeometryCases(c);
 }
 
 }  // namespace vu

@@ -301,11 +301,6 @@ void addQueryCases(std::vector<Case>& c) {
         (void)vk;
         (void)dev;
     });
-    CASE("VUID-RuntimeSpirv-RayTracingOpacityMicromapKHR-11542", {
-        initialize(t, t.tlas->handle, 0x400u, kOrigin, 0.0f, kDown, 10.0f);  // ForceOpacityMicromap2StateEXT
-        (void)vk;
-        (void)dev;
-    });
     CASE("VUID-RuntimeSpirv-OpRayQueryInitializeKHR-06352", {
         initialize(t, t.blas->handle, 0, kOrigin, 0.0f, kDown, 10.0f);  // a bottom level
         (void)vk;

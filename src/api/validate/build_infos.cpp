@@ -138,7 +138,8 @@ void checkBuildInfo(Validator& v, const Device& dev, const VkAccelerationStructu
             checkSweptSpheresRange(v, *geom, r, where, g);
         } else if (geom->geometryType == VK_GEOMETRY_TYPE_TRIANGLES_KHR) {
             checkTrianglesRange(v, geom->geometry.triangles, r, where, g);
-            if (const auto* omm = opacityMicromapOf(geom->geometry.triangles))
+            // The micromap's data is read only once the structure's own rules passed (its index type and stride).
+            if (const auto* omm = opacityMicromapOf(geom->geometry.triangles); omm && !v.failed())
                 checkOpacityMicromapRange(v, dev, *omm, r.primitiveCount, where, g);
         } else if (geom->geometryType == VK_GEOMETRY_TYPE_INSTANCES_KHR) {
             if (!checkInstancesRange(v, dev, geom->geometry.instances, r, info.flags, where, footprint.referenced))

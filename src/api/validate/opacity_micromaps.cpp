@@ -8,7 +8,10 @@
 #include "api/micromap.hpp"
 #include "api/objects.hpp"
 #include "api/validate/parameters.hpp"
+#include "engine/build/opacity_section_build.hpp"
 #include "engine/format/micromap_layout.hpp"
+#include "engine/format/opacity_section.hpp"
+#include "engine/input/build_inputs.hpp"
 #include "engine/input/opacity_micromaps.hpp"
 
 namespace vkas {
@@ -86,16 +89,24 @@ void checkOpacityMicromapRange(Validator& v, const Device& dev,
         if (!micromap) return;
         // The build copies the micromap's states (engine/format/opacity_section.hpp): it must hold some.
         if (!v.check(resolveMicromap(uint64_t(omm.micromap)) != nullptr,
-                     "VUID-VkAccelerationStructureTrianglesOpacityMicromapEXT-micromap-vkas-constructed",
+                     "VUID-VkAccelerationStructureTrianglesOpacityMicromapEXT-micromap-vkasConstructed",
                      "%s (0x%llx) has not been built, copied or deserialized.", name, (ull)uint64_t(omm.micromap)))
             return;
     }
-    if (omm.indexType != VK_INDEX_TYPE_NONE_KHR && primitiveCount != 0 &&
-        !v.check(omm.indexBuffer.hostAddress != nullptr,
-                 "VUID-VkAccelerationStructureTrianglesOpacityMicromapEXT-indexBuffer-vkas-null",
-                 "%s geometry %u: the opacity micromap's indexBuffer.hostAddress is NULL with indexType %d.", where, g,
-                 int(omm.indexType)))
+    // "if there is an instance of VkAccelerationStructureTrianglesOpacityMicromapEXT in the geometry.triangles.pNext
+    // chain, and its indexType is VK_INDEX_TYPE_NONE_KHR, then its indexBuffer.hostAddress must be 0" (10892), "and
+    // its indexType is not VK_INDEX_TYPE_NONE_KHR, then its indexBuffer.hostAddress must not be 0" (11821).
+    if (omm.indexType == VK_INDEX_TYPE_NONE_KHR) {
+        if (!v.check(omm.indexBuffer.hostAddress == nullptr, "VUID-vkBuildAccelerationStructuresKHR-pInfos-10892",
+                     "%s geometry %u: the opacity micromap's indexType is VK_INDEX_TYPE_NONE_KHR but "
+                     "indexBuffer.hostAddress is not NULL.",
+                     where, g))
+            return;
+    } else if (!v.check(omm.indexBuffer.hostAddress != nullptr, "VUID-vkBuildAccelerationStructuresKHR-pInfos-11821",
+                        "%s geometry %u: the opacity micromap's indexBuffer.hostAddress is NULL with indexType %d.",
+                        where, g, int(omm.indexType))) {
         return;
+    }
     const std::byte* block = micromap ? resolveMicromap(uint64_t(omm.micromap)) : nullptr;
     const uint32_t triangles = block ? format::micromapHeader(block)->triangleCount : 0;
     const format::MicromapTriangle* tris = block ? format::micromapTriangles(block) : nullptr;
@@ -109,16 +120,14 @@ void checkOpacityMicromapRange(Validator& v, const Device& dev,
         if (!block) {
             // "If micromap is VK_NULL_HANDLE, then every value read from indexBuffer must be one of the values in
             // VkOpacityMicromapSpecialIndexEXT." (With VK_INDEX_TYPE_NONE_KHR the values are the triangle indices.)
-            v.fail(omm.indexType == VK_INDEX_TYPE_NONE_KHR
-                       ? "VUID-VkAccelerationStructureTrianglesOpacityMicromapKHR-micromap-11579"
-                       : "VUID-VkAccelerationStructureTrianglesOpacityMicromapEXT-micromap-vkas-special",
+            v.fail("VUID-VkAccelerationStructureTrianglesOpacityMicromapEXT-micromap-vkasSpecial",
                    "%s geometry %u: triangle %u uses micromap triangle %llu but the micromap is VK_NULL_HANDLE.",
                    where, g, i, (ull)index.triangle);
             return;
         }
         // "that triangle uses the opacity micromap information from micromap at that index plus baseTriangle":
         // the micromap must have that triangle.
-        if (!v.check(index.triangle < triangles, "VUID-VkAccelerationStructureTrianglesOpacityMicromapKHR-geometry-11576",
+        if (!v.check(index.triangle < triangles, "VUID-VkAccelerationStructureTrianglesOpacityMicromapEXT-micromap-vkasIndex",
                      "%s geometry %u: triangle %u uses micromap triangle %llu (index plus baseTriangle %u) but the "
                      "micromap has %u triangles.",
                      where, g, i, (ull)index.triangle, omm.baseTriangle, triangles))
@@ -139,11 +148,58 @@ void checkOpacityMicromapRange(Validator& v, const Device& dev,
             return {};
         };
         const auto [key, counts] = firstDifference();
-        v.fail("VUID-VkAccelerationStructureTrianglesOpacityMicromapEXT-pUsageCounts-vkas-counts",
+        v.fail("VUID-VkAccelerationStructureTrianglesOpacityMicromapEXT-pUsageCounts-vkasCounts",
                "%s geometry %u: %llu triangles use micromap triangles of format %u and subdivision level %u, but the "
                "usage counts give %llu.",
                where, g, (ull)counts.first, key.first, key.second, (ull)counts.second);
     }
+}
+
+void checkOpacityMicromapUpdate(Validator& v, const VkAccelerationStructureBuildGeometryInfoKHR& info,
+                                const VkAccelerationStructureBuildRangeInfoKHR* ranges, const std::byte* src,
+                                const char* where) {
+    const format::Header* h = format::header(src);
+    constexpr uint32_t kUpdateFlags = VK_BUILD_ACCELERATION_STRUCTURE_ALLOW_OPACITY_MICROMAP_UPDATE_EXT |
+                                      VK_BUILD_ACCELERATION_STRUCTURE_ALLOW_OPACITY_MICROMAP_DATA_UPDATE_EXT;
+    if (h->opacityOffset == 0 || !(h->buildFlags & kUpdateFlags)) return;
+    // "[The application must not] Remove micromaps or VkOpacityMicromapSpecialIndexKHR values from a geometry which
+    // previously had them, or vice versa": vkas holds every geometry to it, the triangles' records ask for them.
+    if (!v.check(opacityPresenceMatches(info, src), "VUID-VkAccelerationStructureTrianglesOpacityMicromapEXT-micromap-vkasPresence",
+                 "%s: the geometries with an opacity micromap are not those of the source's last build.", where))
+        return;
+    if (h->buildFlags & VK_BUILD_ACCELERATION_STRUCTURE_ALLOW_OPACITY_MICROMAP_DATA_UPDATE_EXT) {
+        // "the application must provide a micromap matching the original micromap in structure with only opacity values
+        // updated": no change "between use of VkOpacityMicromapSpecialIndexKHR values and explicit micro-map triangles",
+        // nor of "the subdivision level or format of the micromap triangle associated with any acceleration-structure
+        // triangle".
+        for (uint32_t g = 0; g < info.geometryCount; ++g) {
+            const auto& geom = buildGeometry(info, g);
+            const auto* omm = geom.geometryType == VK_GEOMETRY_TYPE_TRIANGLES_KHR ? opacityMicromapOf(geom.geometry.triangles)
+                                                                                : nullptr;
+            if (!omm) continue;
+            const format::OpacityGeometry* og = format::opacityGeometry(src, g);
+            const format::OpacityPrimitive* before = format::opacityPrimitives(og);
+            const std::byte* block = omm->micromap ? resolveMicromap(uint64_t(omm->micromap)) : nullptr;
+            for (uint32_t i = 0; i < og->primitiveCount && i < ranges[g].primitiveCount; ++i) {
+                const OpacityIndex index = opacityIndexOf(*omm, i);
+                bool same = index.special == format::isSpecialPrimitive(before[i]);
+                if (same && !index.special && block) {
+                    const format::MicromapTriangle& t = format::micromapTriangles(block)[index.triangle];
+                    same = t.format == before[i].format && t.subdivisionLevel == before[i].subdivisionLevel;
+                }
+                if (!v.check(same, "VUID-VkAccelerationStructureTrianglesOpacityMicromapEXT-micromap-vkasDataUpdate",
+                             "%s geometry %u: triangle %u changes its opacity micromap's structure (special index, "
+                             "subdivision level or format) in an ALLOW_OPACITY_MICROMAP_DATA_UPDATE update.",
+                             where, g, i))
+                    return;
+            }
+        }
+    }
+    const uint64_t size = opacitySectionSize(info, ranges, resolveMicromap);
+    if (!v.check(size != UINT64_MAX && size <= h->opacityReserved, "VUID-vkBuildAccelerationStructuresKHR-pInfos-10126",
+                 "%s: the update's opacity micromaps take %llu bytes, but the structure's build kept %llu for them.",
+                 where, (ull)size, (ull)h->opacityReserved))
+        return;
 }
 
 }  // namespace vkas

@@ -4,6 +4,7 @@
 
 #include <vulkan/vulkan_core.h>
 
+#include <cstddef>
 #include <cstdint>
 
 #include "api/validate/validator.hpp"
@@ -21,5 +22,13 @@ void checkOpacityMicromapStructure(Validator& v, const VkAccelerationStructureTr
 void checkOpacityMicromapRange(Validator& v, const Device& dev,
                                const VkAccelerationStructureTrianglesOpacityMicromapEXT& omm, uint32_t primitiveCount,
                                const char* where, uint32_t g);
+
+// An update of a structure whose micromaps it may change (ALLOW_OPACITY_MICROMAP_UPDATE or _DATA_UPDATE): the same
+// geometries keep a micromap, the new section fits the room the build kept (10126), and a data update keeps every
+// triangle's special index or subdivision level and format. `src` is the source's block. Call after every other rule
+// of the call passed (it reads the inputs).
+void checkOpacityMicromapUpdate(Validator& v, const VkAccelerationStructureBuildGeometryInfoKHR& info,
+                                const VkAccelerationStructureBuildRangeInfoKHR* ranges, const std::byte* src,
+                                const char* where);
 
 }  // namespace vkas

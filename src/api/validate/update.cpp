@@ -5,6 +5,7 @@
 #include <algorithm>
 
 #include "api/build_geometry_info.hpp"
+#include "api/validate/opacity_micromaps.hpp"
 #include "api/validate/parameters.hpp"
 #include "engine/build/refit.hpp"
 #include "engine/build/structure_build.hpp"
@@ -111,6 +112,8 @@ const std::byte* checkUpdateSource(Validator& v, const Device& dev, const VkAcce
 void checkUpdateData(Validator& v, const VkAccelerationStructureBuildGeometryInfoKHR& info,
                      const VkAccelerationStructureBuildRangeInfoKHR* ranges, const std::byte* src, const char* where) {
     if (!src || !ranges || v.failureCount() != 0) return;
+    checkOpacityMicromapUpdate(v, info, ranges, src, where);  // [EXT-OMM]
+    if (v.failureCount() != 0) return;
     RefitJob job{&info, ranges, src, nullptr, 0, nullptr};
     if (!refitShapeMatches(job)) return;
     const format::GeometryDesc* descs = format::geometries(src);

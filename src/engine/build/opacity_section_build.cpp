@@ -130,4 +130,16 @@ uint64_t opacitySectionSize(const VkAccelerationStructureBuildGeometryInfoKHR& i
     return layOut(info, ranges, resolve, nullptr, 0, kFailed);
 }
 
+bool opacityPresenceMatches(const VkAccelerationStructureBuildGeometryInfoKHR& info, const std::byte* block) {
+    const Header* h = header(block);
+    if (h->geometryCount != info.geometryCount) return false;
+    for (uint32_t g = 0; g < info.geometryCount; ++g) {
+        const auto& geom = buildGeometry(info, g);
+        const bool has = geom.geometryType == VK_GEOMETRY_TYPE_TRIANGLES_KHR && opacityMicromapOf(geom.geometry.triangles);
+        const bool had = h->opacityOffset != 0 && opacityGeometryBlocks(block)[g] != 0;
+        if (has != had) return false;
+    }
+    return true;
+}
+
 }  // namespace vkas

@@ -45,4 +45,8 @@ uint64_t writeOpacitySection(const VkAccelerationStructureBuildGeometryInfoKHR& 
 uint64_t opacitySectionSize(const VkAccelerationStructureBuildGeometryInfoKHR& info,
                             const VkAccelerationStructureBuildRangeInfoKHR* ranges, MicromapResolver resolve);
 
+// Whether the geometries of `info` that have an opacity micromap are exactly those of `block`'s section: what an
+// update that rewrites the section needs (its triangle records keep asking their geometry's micromap).
+bool opacityPresenceMatches(const VkAccelerationStructureBuildGeometryInfoKHR& info, const std::byte* block);
+
 }  // namespace vkas

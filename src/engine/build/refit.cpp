@@ -48,7 +48,8 @@ VkResult refitAccelerationStructure(const RefitJob& job) {
     if (h->usedSize > job.dstSize) return VK_ERROR_UNKNOWN;
     const bool rewritesMicromaps = h->opacityOffset != 0 && (h->buildFlags & kOpacityUpdateFlags);
     // Lay out the new micromap section before anything is written: an update that cannot hold it changes nothing.
-    if (rewritesMicromaps && opacitySectionSize(*job.info, job.ranges, job.micromaps) > h->opacityReserved)
+    if (rewritesMicromaps && (!opacityPresenceMatches(*job.info, job.src) ||
+                              opacitySectionSize(*job.info, job.ranges, job.micromaps) > h->opacityReserved))
         return VK_ERROR_UNKNOWN;
     const uint64_t opacityOffset = h->opacityOffset, opacityReserved = h->opacityReserved;
     kindOf(h).refit(job);
