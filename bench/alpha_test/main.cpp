@@ -51,6 +51,7 @@ struct Options {
     bool embreeRobust = true;
     bool validate = false;
     bool noEmbree = false;
+    size_t showDifferences = 0;  // print the first N differing rays of each variant
     std::string json;
 };
 
@@ -59,7 +60,7 @@ struct Options {
     std::fprintf(stderr,
                  "usage: vkas_bench_alpha [--quads N] [--patterns K] [--level L] [--level4 L4] [--size S] [--rays N]\n"
                  "                        [--reps R] [--threads N] [--seed S] [--embree-flags robust|none]\n"
-                 "                        [--validate] [--no-embree] [--quick] [--json FILE]\n");
+                 "                        [--validate] [--no-embree] [--quick] [--show-differences N] [--json FILE]\n");
     std::exit(2);
 }
 
@@ -95,6 +96,7 @@ Options parse(int argc, char** argv) {
         else if (a == "--no-embree") o.noEmbree = true;
         else if (a == "--quick") o.quads = 10000, o.rays = 16384, o.reps = 1;
         else if (a == "--json") o.json = next();
+        else if (a == "--show-differences") o.showDifferences = size_t(num());
         else if (a == "--help" || a == "-h") usage(nullptr);
         else usage(("unknown option " + a).c_str());
     }
@@ -739,13 +741,34 @@ struct Agreement {
     size_t differing() const { return differ; }
 };
 
-Agreement compare(const Scene& s, const std::vector<Hit>& ref, const std::vector<Hit>& other, bool anyHit) {
+size_t gShow = 0;  // --show-differences
+
+void showDifference(const Scene& s, const char* what, size_t i, const Hit& a, const Hit& b, bool anyHit) {
+    auto one = [&](const Hit& h) {
+        char buf[160];
+        if (!h.hit()) return std::string("miss");
+        if (anyHit) return std::string("hit");
+        std::snprintf(buf, sizeof buf, "prim %d t %.9g uv (%.9g, %.9g) micro-triangle %u (%s)%s", h.prim, double(h.t),
+                      double(h.u), double(h.v), alpha::microTriangleIndex(h.u, h.v, s.level),
+                      s.opaque(uint32_t(h.prim), h.u, h.v) ? "opaque" : "transparent", nearMicroEdge(s, h) ? ", at an edge" : "");
+        return std::string(buf);
+    };
+    std::printf("  %s, ray %zu: reference %s; other %s\n", what, i, one(a).c_str(), one(b).c_str());
+}
+
+Agreement compare(const Scene& s, const std::vector<Hit>& ref, const std::vector<Hit>& other, bool anyHit,
+                  const char* what = "") {
     Agreement g;
+    size_t shown = 0;
+    auto show = [&](size_t i) {
+        if (shown++ < gShow) showDifference(s, what, i, ref[i], other[i], anyHit);
+    };
     for (size_t i = 0; i < ref.size(); ++i) {
         const Hit &a = ref[i], &b = other[i];
         if (a.hit() != b.hit()) {
             ++g.differ;
             if (!anyHit && nearMicroEdge(s, a.hit() ? a : b)) ++g.differEdge;
+            show(i);
             continue;
         }
         if (!a.hit() || anyHit) {
@@ -756,7 +779,7 @@ Agreement compare(const Scene& s, const std::vector<Hit>& ref, const std::vector
         if (a.prim == b.prim) {
             if (std::memcmp(&a.t, &b.t, sizeof a.t) == 0) ++g.identical;
             else if (std::fabs(a.t - b.t) <= tol) ++g.sameNear;
-            else ++g.differ;
+            else ++g.differ, show(i);
             continue;
         }
         if (std::fabs(a.t - b.t) <= tol) {
@@ -765,6 +788,7 @@ Agreement compare(const Scene& s, const std::vector<Hit>& ref, const std::vector
         }
         ++g.differ;
         if (nearMicroEdge(s, a.t < b.t ? a : b)) ++g.differEdge;
+        show(i);
     }
     return g;
 }
@@ -810,6 +834,7 @@ struct Row {
 
 int main(int argc, char** argv) {
     const Options o = parse(argc, argv);
+    gShow = o.showDifferences;
     std::string command = "vkas_bench_alpha";
     for (int i = 1; i < argc; ++i) command += std::string(" ") + argv[i];
     try {
@@ -896,8 +921,9 @@ int main(int argc, char** argv) {
             auto add = [&](Row row, const std::vector<Hit>* h1, const std::vector<Hit>* hN) {
                 if (!ref.empty()) {
                     row.compared = true;
-                    if (h1) row.agree1 = compare(scene, ref, *h1, anyHit);
-                    if (hN) row.agreeN = compare(scene, ref, *hN, anyHit);
+                    const std::string what = std::string(kKindName[k]) + " " + row.variant + " " + row.call;
+                    if (h1) row.agree1 = compare(scene, ref, *h1, anyHit, (what + ", 1 thread").c_str());
+                    if (hN) row.agreeN = compare(scene, ref, *hN, anyHit, (what + ", all threads").c_str());
                 }
                 rows.push_back(row);
             };
@@ -910,7 +936,7 @@ int main(int argc, char** argv) {
                 row.candidatesPerRay = double(cand) / n;
                 if (o.threads > 1) {
                     row.mraysN = timeIt([&](std::vector<Hit>& h) { return traceRayQuery(scene, tlasConfirmN, anyHit, rays, h, o.threads, cand); }, hN);
-                    row.agreeN = compare(scene, ref, hN, anyHit);
+                    row.agreeN = compare(scene, ref, hN, anyHit, "vkas confirmation, all threads");
                     row.compared = true;
                 }
                 rows.push_back(row);
