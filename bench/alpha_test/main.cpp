@@ -24,6 +24,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
+#include <functional>
 #include <memory>
 #include <random>
 #include <sstream>
@@ -905,6 +906,8 @@ int main(int argc, char** argv) {
                     scene.states2.size(), scene.ommIndex.size() * sizeof(uint32_t));
 
         // --- traversal ---
+        // Per ray kind, the variants' runs are interleaved (round r runs every variant once on 1 thread and once on
+        // all threads), so that a change of load on a shared machine falls on all of them alike; medians per variant.
         std::vector<Row> rows;
         bool bad = false;
         for (int k = 0; k < kKinds; ++k) {
@@ -912,75 +915,73 @@ int main(int argc, char** argv) {
             const bool anyHit = kAnyHit[k];
             const std::vector<VkasRay> rays = makeRays(kind, o.rays, o.seed);
             const double n = double(rays.size());
-            std::vector<Hit> ref;  // vkas + confirmation, 1 thread: the reference (the alpha at the very barycentrics)
-            auto timeIt = [&](auto&& run, std::vector<Hit>& hits) {
-                std::vector<double> ms;
-                for (int r = 0; r < o.reps; ++r) ms.push_back(run(hits));
-                return n / median(ms) / 1000;
+            using Run = std::function<double(std::vector<Hit>&, unsigned threads, uint64_t& candidates)>;
+            struct Runner {
+                Row row;
+                Run run;
+                bool rayQuery = false, compared = true;
+                std::vector<double> ms1, msN;
+                std::vector<Hit> h1, hN;
+                uint64_t candidates = 0;
             };
-            auto add = [&](Row row, const std::vector<Hit>* h1, const std::vector<Hit>* hN) {
-                if (!ref.empty()) {
-                    row.compared = true;
-                    const std::string what = std::string(kKindName[k]) + " " + row.variant + " " + row.call;
-                    if (h1) row.agree1 = compare(scene, ref, *h1, anyHit, (what + ", 1 thread").c_str());
-                    if (hN) row.agreeN = compare(scene, ref, *hN, anyHit, (what + ", all threads").c_str());
-                }
-                rows.push_back(row);
+            std::vector<Runner> runners;
+            const unsigned T = o.threads;
+            auto batch = [&](Vkas& one, VkAccelerationStructureKHR t1, Vkas& all, VkAccelerationStructureKHR tN) -> Run {
+                const VkDevice d1 = one.device(), dN = all.device();
+                return [&rays, d1, dN, t1, tN, anyHit](std::vector<Hit>& h, unsigned threads, uint64_t&) {
+                    return threads == 1 ? traceBatch(d1, t1, anyHit, rays, h) : traceBatch(dN, tN, anyHit, rays, h);
+                };
             };
-            std::vector<Hit> h1, hN;
-            uint64_t cand = 0;
-            // 2. vkas + confirmation (the reference)
-            {
-                Row row{kind, "vkas confirmation", "vkasRayQuery* loop"};
-                row.mrays1 = timeIt([&](std::vector<Hit>& h) { return traceRayQuery(scene, tlasConfirm1, anyHit, rays, h, 1, cand); }, ref);
-                row.candidatesPerRay = double(cand) / n;
-                if (o.threads > 1) {
-                    row.mraysN = timeIt([&](std::vector<Hit>& h) { return traceRayQuery(scene, tlasConfirmN, anyHit, rays, h, o.threads, cand); }, hN);
-                    row.agreeN = compare(scene, ref, hN, anyHit, "vkas confirmation, all threads");
-                    row.compared = true;
-                }
-                rows.push_back(row);
-            }
+            auto query = [&](VkAccelerationStructureKHR t1, VkAccelerationStructureKHR tN) -> Run {
+                return [&, t1, tN, anyHit](std::vector<Hit>& h, unsigned threads, uint64_t& c) {
+                    return traceRayQuery(scene, threads == 1 ? t1 : tN, anyHit, rays, h, threads, c);
+                };
+            };
+            // 2. vkas + confirmation: the reference (the alpha at the very barycentrics)
+            runners.push_back({Row{kind, "vkas confirmation", "vkasRayQuery* loop"}, query(tlasConfirm1, tlasConfirmN), true});
             // Context, not compared: the same non-opaque scene through vkasTraceRays, which confirms every candidate
             // (the alpha ignored: every quad opaque). What traversal alone costs on these quads.
-            {
-                Row row{kind, "vkas no alpha (context)", anyHit ? "vkasTraceRays ANY_HIT" : "vkasTraceRays"};
-                row.mrays1 = timeIt([&](std::vector<Hit>& h) { return traceBatch(vk1.device(), tlasConfirm1, anyHit, rays, h); }, h1);
-                if (o.threads > 1)
-                    row.mraysN = timeIt([&](std::vector<Hit>& h) { return traceBatch(vkN.device(), tlasConfirmN, anyHit, rays, h); }, hN);
-                rows.push_back(row);
-            }
-            // 1. vkas + 2-state micromap
+            runners.push_back({Row{kind, "vkas no alpha (context)", anyHit ? "vkasTraceRays ANY_HIT" : "vkasTraceRays"},
+                               batch(vk1, tlasConfirm1, vkN, tlasConfirmN), false, false});
             if (omm) {
-                Row row{kind, "vkas micromap 2-state", anyHit ? "vkasTraceRays ANY_HIT" : "vkasTraceRays"};
-                row.mrays1 = timeIt([&](std::vector<Hit>& h) { return traceBatch(vk1.device(), tlasOmm2[0], anyHit, rays, h); }, h1);
-                if (o.threads > 1)
-                    row.mraysN = timeIt([&](std::vector<Hit>& h) { return traceBatch(vkN.device(), tlasOmm2[1], anyHit, rays, h); }, hN);
-                add(row, &h1, o.threads > 1 ? &hN : nullptr);
+                // 1. vkas + 2-state micromap; 4. 4-state micromap + confirmation of the unknown micro-triangles
+                runners.push_back({Row{kind, "vkas micromap 2-state", anyHit ? "vkasTraceRays ANY_HIT" : "vkasTraceRays"},
+                                   batch(vk1, tlasOmm2[0], vkN, tlasOmm2[1])});
+                runners.push_back({Row{kind, "vkas micromap 4-state + confirm", "vkasRayQuery* loop"},
+                                   query(tlasOmm4[0], tlasOmm4[1]), true});
             }
-            // 4. vkas + 4-state micromap + confirmation of the unknown micro-triangles
-            if (omm) {
-                Row row{kind, "vkas micromap 4-state + confirm", "vkasRayQuery* loop"};
-                row.mrays1 = timeIt([&](std::vector<Hit>& h) { return traceRayQuery(scene, tlasOmm4[0], anyHit, rays, h, 1, cand); }, h1);
-                row.candidatesPerRay = double(cand) / n;
-                if (o.threads > 1)
-                    row.mraysN = timeIt([&](std::vector<Hit>& h) { return traceRayQuery(scene, tlasOmm4[1], anyHit, rays, h, o.threads, cand); }, hN);
-                add(row, &h1, o.threads > 1 ? &hN : nullptr);
-            }
-            // 3. Embree + filter functions
             if (embree) {
-                Row row{kind, "Embree filter", anyHit ? "rtcOccluded1" : "rtcIntersect1"};
-                row.mrays1 = timeIt([&](std::vector<Hit>& h) { return embree->trace(anyHit, kind == kCamera, false, rays, h, 1); }, h1);
-                if (o.threads > 1)
-                    row.mraysN = timeIt([&](std::vector<Hit>& h) { return embree->trace(anyHit, kind == kCamera, false, rays, h, o.threads); }, hN);
-                add(row, &h1, o.threads > 1 ? &hN : nullptr);
-                if (kind == kCamera) {
-                    Row p{kind, "Embree filter", "rtcIntersect8"};
-                    p.mrays1 = timeIt([&](std::vector<Hit>& h) { return embree->trace(false, true, true, rays, h, 1); }, h1);
-                    if (o.threads > 1)
-                        p.mraysN = timeIt([&](std::vector<Hit>& h) { return embree->trace(false, true, true, rays, h, o.threads); }, hN);
-                    add(p, &h1, o.threads > 1 ? &hN : nullptr);
+                // 3. Embree + filter functions (and its 8-wide packets for the camera rays)
+                runners.push_back({Row{kind, "Embree filter", anyHit ? "rtcOccluded1" : "rtcIntersect1"},
+                                   [&, anyHit, kind](std::vector<Hit>& h, unsigned threads, uint64_t&) {
+                                       return embree->trace(anyHit, kind == kCamera, false, rays, h, threads);
+                                   }});
+                if (kind == kCamera)
+                    runners.push_back({Row{kind, "Embree filter", "rtcIntersect8"},
+                                       [&](std::vector<Hit>& h, unsigned threads, uint64_t&) {
+                                           return embree->trace(false, true, true, rays, h, threads);
+                                       }});
+            }
+            for (int r = 0; r < o.reps; ++r)
+                for (Runner& x : runners) {
+                    uint64_t c = 0;
+                    x.ms1.push_back(x.run(x.h1, 1, c));
+                    x.candidates = c;
+                    if (T > 1) x.msN.push_back(x.run(x.hN, T, c));
                 }
+            const std::vector<Hit>& ref = runners[0].h1;
+            for (Runner& x : runners) {
+                Row row = x.row;
+                row.mrays1 = n / median(x.ms1) / 1000;
+                if (T > 1) row.mraysN = n / median(x.msN) / 1000;
+                if (x.rayQuery) row.candidatesPerRay = double(x.candidates) / n;
+                row.compared = x.compared;
+                if (x.compared) {
+                    const std::string what = std::string(kKindName[k]) + " " + row.variant + " " + row.call;
+                    if (&x != &runners[0]) row.agree1 = compare(scene, ref, x.h1, anyHit, (what + ", 1 thread").c_str());
+                    if (T > 1) row.agreeN = compare(scene, ref, x.hN, anyHit, (what + ", all threads").c_str());
+                }
+                rows.push_back(row);
             }
             size_t hitsRef = 0;
             for (const Hit& h : ref) hitsRef += h.hit();
