@@ -20,6 +20,7 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <ctime>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -110,6 +111,15 @@ Options parse(int argc, char** argv) {
 double msSince(std::chrono::steady_clock::time_point t0) {
     return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 }
+
+// The calling thread's CPU time: on a shared machine, the 1-thread runs are also rated by it (every 1-thread
+// variant runs on the calling thread alone), which leaves out the time other processes take the core.
+double threadCpuMs() {
+    timespec ts{};
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+    return double(ts.tv_sec) * 1e3 + double(ts.tv_nsec) * 1e-6;
+}
+double gCpuMs = 0;  // the calling thread's CPU time in the last trace call's timed part
 
 double median(std::vector<double> v) {
     std::sort(v.begin(), v.end());
@@ -547,11 +557,13 @@ public:
 double traceBatch(VkDevice dev, VkAccelerationStructureKHR tlas, bool anyHit, const std::vector<VkasRay>& rays,
                   std::vector<Hit>& hits) {
     std::vector<VkasHit> out(rays.size());
+    const double c0 = threadCpuMs();
     const auto t0 = std::chrono::steady_clock::now();
     check(vkasTraceRays(dev, tlas, anyHit ? VKAS_TRACE_MODE_ANY_HIT : VKAS_TRACE_MODE_CLOSEST_HIT, VKAS_RAY_FLAG_NONE,
                         0xFF, uint32_t(rays.size()), rays.data(), out.data()),
           "vkasTraceRays");
     const double ms = msSince(t0);
+    gCpuMs = threadCpuMs() - c0;
     hits.assign(rays.size(), Hit{});
     for (size_t i = 0; i < rays.size(); ++i)
         if (out[i].type != VKAS_COMMITTED_INTERSECTION_NONE)
@@ -567,6 +579,7 @@ double traceRayQuery(const Scene& s, VkAccelerationStructureKHR tlas, bool anyHi
     hits.assign(rays.size(), Hit{});
     std::atomic<uint64_t> total{0};
     const uint32_t flags = anyHit ? VKAS_RAY_FLAG_TERMINATE_ON_FIRST_HIT : VKAS_RAY_FLAG_NONE;
+    const double c0 = threadCpuMs();
     const auto t0 = std::chrono::steady_clock::now();
     parallelFor(threads, rays.size(), kChunk, [&](size_t begin, size_t end) {
         auto q = std::make_unique<VkasRayQuery>();
@@ -592,6 +605,7 @@ double traceRayQuery(const Scene& s, VkAccelerationStructureKHR tlas, bool anyHi
         total.fetch_add(seen);
     });
     const double ms = msSince(t0);
+    gCpuMs = threadCpuMs() - c0;
     candidates = total.load();
     return ms;
 }
@@ -663,6 +677,7 @@ public:
     double trace(bool anyHit, bool coherent, bool packets, const std::vector<VkasRay>& rays, std::vector<Hit>& hits,
                  unsigned threads) const {
         hits.assign(rays.size(), Hit{});
+        const double c0 = threadCpuMs();
         const auto t0 = std::chrono::steady_clock::now();
         parallelFor(threads, rays.size(), kChunk, [&](size_t begin, size_t end) {
             RTCIntersectContext ctx;
@@ -705,7 +720,9 @@ public:
                         hits[b + j] = {int32_t(p.hit.primID[j]), p.ray.tfar[j], p.hit.u[j], p.hit.v[j]};
             }
         });
-        return msSince(t0);
+        const double ms = msSince(t0);
+        gCpuMs = threadCpuMs() - c0;
+        return ms;
     }
 
 private:
@@ -826,6 +843,7 @@ struct Row {
     Kind kind;
     std::string variant, call;
     double mrays1 = 0, mraysN = 0;  // 0: not run
+    double mraysCpu1 = 0;           // 1 thread, by the thread's CPU time
     double candidatesPerRay = -1;   // rays-query variants: non-opaque candidates returned to the application per ray
     Agreement agree1, agreeN;
     bool compared = false;
@@ -920,7 +938,7 @@ int main(int argc, char** argv) {
                 Row row;
                 Run run;
                 bool rayQuery = false, compared = true;
-                std::vector<double> ms1, msN;
+                std::vector<double> ms1, msN, cpu1;
                 std::vector<Hit> h1, hN;
                 uint64_t candidates = 0;
             };
@@ -966,6 +984,7 @@ int main(int argc, char** argv) {
                 for (Runner& x : runners) {
                     uint64_t c = 0;
                     x.ms1.push_back(x.run(x.h1, 1, c));
+                    x.cpu1.push_back(gCpuMs);
                     x.candidates = c;
                     if (T > 1) x.msN.push_back(x.run(x.hN, T, c));
                 }
@@ -973,6 +992,7 @@ int main(int argc, char** argv) {
             for (Runner& x : runners) {
                 Row row = x.row;
                 row.mrays1 = n / median(x.ms1) / 1000;
+                row.mraysCpu1 = n / median(x.cpu1) / 1000;
                 if (T > 1) row.mraysN = n / median(x.msN) / 1000;
                 if (x.rayQuery) row.candidatesPerRay = double(x.candidates) / n;
                 row.compared = x.compared;
@@ -990,9 +1010,10 @@ int main(int argc, char** argv) {
         }
 
         // --- the table ---
-        std::printf("\n%-7s %-32s %-22s %9s %9s %9s %9s %9s %9s %8s  %s\n", "rays", "variant", "call", "1t Mray/s",
-                    (std::to_string(o.threads) + "t Mray/s").c_str(), "scaling", "/confirm", "/Embree1", "/EmbreeN", "cand/ray",
-                    "rays differing from the reference (1t; Nt), of which at a (micro-)edge");
+        const std::string nt = std::to_string(o.threads) + "t";
+        std::printf("\n%-7s %-32s %-22s %8s %8s %8s %7s %8s %8s %8s %8s %8s  %s\n", "rays", "variant", "call", "1t wall",
+                    "1t cpu", (nt + " wall").c_str(), "scaling", "/conf 1t", ("/conf " + nt).c_str(), "/Emb 1t",
+                    ("/Emb " + nt).c_str(), "cand/ray", "differing from the reference: 1t (at an edge), ties; all threads");
         for (const Row& r : rows) {
             const Row* conf = nullptr;
             const Row* emb = nullptr;
@@ -1014,11 +1035,11 @@ int main(int argc, char** argv) {
             };
             char cand[16] = "-";
             if (r.candidatesPerRay >= 0) std::snprintf(cand, sizeof cand, "%.2f", r.candidatesPerRay);
-            const double c1 = conf ? conf->mrays1 : 0, cN = conf ? conf->mraysN : 0;
-            std::printf("%-7s %-32s %-22s %9.3f %9.3f %9s %9s %9s %9s %8s  %s\n", kKindName[r.kind], r.variant.c_str(),
-                        r.call.c_str(), r.mrays1, r.mraysN, ratio(r.mraysN, r.mrays1).c_str(),
-                        (ratio(r.mrays1, c1) + "/" + ratio(r.mraysN, cN)).c_str(), ratio(r.mrays1, emb ? emb->mrays1 : 0).c_str(),
-                        ratio(r.mraysN, emb ? emb->mraysN : 0).c_str(), cand,
+            std::printf("%-7s %-32s %-22s %8.3f %8.3f %8.3f %7s %8s %8s %8s %8s %8s  %s\n", kKindName[r.kind],
+                        r.variant.c_str(), r.call.c_str(), r.mrays1, r.mraysCpu1, r.mraysN, ratio(r.mraysN, r.mrays1).c_str(),
+                        ratio(r.mraysCpu1, conf ? conf->mraysCpu1 : 0).c_str(), ratio(r.mraysN, conf ? conf->mraysN : 0).c_str(),
+                        ratio(r.mraysCpu1, emb ? emb->mraysCpu1 : 0).c_str(), ratio(r.mraysN, emb ? emb->mraysN : 0).c_str(),
+                        cand,
                         r.variant == "vkas confirmation" ? ("reference; " + agree(r.agreeN)).c_str()
                         : !r.compared                    ? "not compared (other hits)"
                                                          : (agree(r.agree1) + "; " + agree(r.agreeN)).c_str());
@@ -1027,9 +1048,11 @@ int main(int argc, char** argv) {
             const size_t limit = size_t(std::max(2.0, 1e-4 * double(o.rays)));
             if (r.compared && (r.agree1.differ > limit || r.agreeN.differ > limit)) bad = true;
         }
-        std::printf("/confirm: rate over vkas confirmation's on the same threads (1t/Nt); /Embree1, /EmbreeN: over Embree's "
-                    "one-ray call on 1 / %u threads; cand/ray: triangle candidates returned to the application per ray.\n",
-                    o.threads);
+        std::printf("Mrays/s. 1t wall / 1t cpu: one thread, by wall-clock time / by the thread's CPU time (other processes' "
+                    "time left out); %s wall: all threads, wall clock. /conf, /Emb: rate over vkas confirmation's / Embree's "
+                    "one-ray call (1t: by CPU time; %s: wall clock). cand/ray: triangle candidates returned to the "
+                    "application per ray.\n",
+                    nt.c_str(), nt.c_str());
         std::printf("Embree scene: MEDIUM, %s; vkas: default build flags, one identity instance, validation %s.\n",
                     o.embreeRobust ? "RTC_SCENE_FLAG_ROBUST" : "default flags", o.validate ? "on" : "off");
         if (bad)
@@ -1054,7 +1077,7 @@ int main(int argc, char** argv) {
                 const Row& r = rows[i];
                 j << (i ? ",\n" : "\n") << "    {\"rays\": " << jsonString(kKindName[r.kind]) << ", \"variant\": "
                   << jsonString(r.variant) << ", \"call\": " << jsonString(r.call) << ", \"mrays_1_thread\": " << r.mrays1
-                  << ", \"mrays_all_threads\": " << r.mraysN << ", \"candidates_per_ray\": " << r.candidatesPerRay
+                  << ", \"mrays_1_thread_cpu\": " << r.mraysCpu1 << ", \"mrays_all_threads\": " << r.mraysN << ", \"candidates_per_ray\": " << r.candidatesPerRay
                   << ", \"differing_1_thread\": " << r.agree1.differ << ", \"differing_1_thread_at_edge\": " << r.agree1.differEdge
                   << ", \"ties_1_thread\": " << r.agree1.tie << ", \"differing_all_threads\": " << r.agreeN.differ
                   << ", \"differing_all_threads_at_edge\": " << r.agreeN.differEdge << "}";
