@@ -673,8 +673,9 @@ public:
     double buildMs() const { return ms_; }
     int64_t bytes() const { return bytes_; }
 
-    // rtcIntersect1 / rtcOccluded1 per ray, or rtcIntersect8 packets (`packets`, closest hit only).
-    double trace(bool anyHit, bool coherent, bool packets, const std::vector<VkasRay>& rays, std::vector<Hit>& hits,
+    // rtcIntersect1 / rtcOccluded1 per ray (packet 0), or rtcIntersect8 / rtcIntersect16 packets (packet 8 or 16,
+    // closest hit only).
+    double trace(bool anyHit, bool coherent, int packet, const std::vector<VkasRay>& rays, std::vector<Hit>& hits,
                  unsigned threads) const {
         hits.assign(rays.size(), Hit{});
         const double c0 = threadCpuMs();
@@ -683,7 +684,7 @@ public:
             RTCIntersectContext ctx;
             rtcInitIntersectContext(&ctx);
             ctx.flags = coherent ? RTC_INTERSECT_CONTEXT_FLAG_COHERENT : RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT;
-            if (!packets) {
+            if (packet == 0) {
                 for (size_t i = begin; i < end; ++i) {
                     const VkasRay& v = rays[i];
                     RTCRayHit rh;
@@ -702,22 +703,30 @@ public:
                 }
                 return;
             }
-            for (size_t b = begin; b < end; b += 8) {
-                alignas(32) int valid[8];
-                alignas(32) RTCRayHit8 p;
-                for (size_t j = 0; j < 8; ++j) {
-                    const VkasRay& v = rays[std::min(b + j, end - 1)];
-                    valid[j] = b + j < end ? -1 : 0;
-                    p.ray.org_x[j] = v.origin[0], p.ray.org_y[j] = v.origin[1], p.ray.org_z[j] = v.origin[2];
-                    p.ray.dir_x[j] = v.direction[0], p.ray.dir_y[j] = v.direction[1], p.ray.dir_z[j] = v.direction[2];
-                    p.ray.tnear[j] = v.tMin, p.ray.tfar[j] = v.tMax, p.ray.time[j] = 0;
-                    p.ray.mask[j] = 0xFFFFFFFFu, p.ray.id[j] = 0, p.ray.flags[j] = 0;
-                    p.hit.geomID[j] = p.hit.instID[0][j] = RTC_INVALID_GEOMETRY_ID;
+            auto packets = [&](auto& p, auto call, size_t w) {
+                alignas(64) int valid[16];
+                for (size_t b = begin; b < end; b += w) {
+                    for (size_t j = 0; j < w; ++j) {
+                        const VkasRay& v = rays[std::min(b + j, end - 1)];
+                        valid[j] = b + j < end ? -1 : 0;
+                        p.ray.org_x[j] = v.origin[0], p.ray.org_y[j] = v.origin[1], p.ray.org_z[j] = v.origin[2];
+                        p.ray.dir_x[j] = v.direction[0], p.ray.dir_y[j] = v.direction[1], p.ray.dir_z[j] = v.direction[2];
+                        p.ray.tnear[j] = v.tMin, p.ray.tfar[j] = v.tMax, p.ray.time[j] = 0;
+                        p.ray.mask[j] = 0xFFFFFFFFu, p.ray.id[j] = 0, p.ray.flags[j] = 0;
+                        p.hit.geomID[j] = p.hit.instID[0][j] = RTC_INVALID_GEOMETRY_ID;
+                    }
+                    call(valid, scene_, &ctx, &p);
+                    for (size_t j = 0; j < w && b + j < end; ++j)
+                        if (p.hit.geomID[j] != RTC_INVALID_GEOMETRY_ID)
+                            hits[b + j] = {int32_t(p.hit.primID[j]), p.ray.tfar[j], p.hit.u[j], p.hit.v[j]};
                 }
-                rtcIntersect8(valid, scene_, &ctx, &p);
-                for (size_t j = 0; j < 8 && b + j < end; ++j)
-                    if (p.hit.geomID[j] != RTC_INVALID_GEOMETRY_ID)
-                        hits[b + j] = {int32_t(p.hit.primID[j]), p.ray.tfar[j], p.hit.u[j], p.hit.v[j]};
+            };
+            if (packet == 8) {
+                alignas(64) RTCRayHit8 p;
+                packets(p, rtcIntersect8, 8);
+            } else {
+                alignas(64) RTCRayHit16 p;
+                packets(p, rtcIntersect16, 16);
             }
         });
         const double ms = msSince(t0);
@@ -972,13 +981,14 @@ int main(int argc, char** argv) {
                 // 3. Embree + filter functions (and its 8-wide packets for the camera rays)
                 runners.push_back({Row{kind, "Embree filter", anyHit ? "rtcOccluded1" : "rtcIntersect1"},
                                    [&, anyHit, kind](std::vector<Hit>& h, unsigned threads, uint64_t&) {
-                                       return embree->trace(anyHit, kind == kCamera, false, rays, h, threads);
+                                       return embree->trace(anyHit, kind == kCamera, 0, rays, h, threads);
                                    }});
                 if (kind == kCamera)
-                    runners.push_back({Row{kind, "Embree filter", "rtcIntersect8"},
-                                       [&](std::vector<Hit>& h, unsigned threads, uint64_t&) {
-                                           return embree->trace(false, true, true, rays, h, threads);
-                                       }});
+                    for (const int w : {8, 16})
+                        runners.push_back({Row{kind, "Embree filter", "rtcIntersect" + std::to_string(w)},
+                                           [&, w](std::vector<Hit>& h, unsigned threads, uint64_t&) {
+                                               return embree->trace(false, true, w, rays, h, threads);
+                                           }});
             }
             for (int r = 0; r < o.reps; ++r)
                 for (Runner& x : runners) {
