@@ -574,8 +574,9 @@ double traceBatch(VkDevice dev, VkAccelerationStructureKHR tlas, bool anyHit, co
 // The ray-query loop: every triangle candidate that Proceed returns (non-opaque) is alpha-tested at its barycentrics
 // and confirmed if opaque. `candidates` counts them. The hits are written inside the timed loop, as vkasTraceRays
 // writes its VkasHit.
+// alphaTest false: every candidate confirmed (the alpha ignored), for the context rows.
 double traceRayQuery(const Scene& s, VkAccelerationStructureKHR tlas, bool anyHit, const std::vector<VkasRay>& rays,
-                     std::vector<Hit>& hits, unsigned threads, uint64_t& candidates) {
+                     std::vector<Hit>& hits, unsigned threads, uint64_t& candidates, bool alphaTest = true) {
     hits.assign(rays.size(), Hit{});
     std::atomic<uint64_t> total{0};
     const uint32_t flags = anyHit ? VKAS_RAY_FLAG_TERMINATE_ON_FIRST_HIT : VKAS_RAY_FLAG_NONE;
@@ -593,7 +594,7 @@ double traceRayQuery(const Scene& s, VkAccelerationStructureKHR tlas, bool anyHi
                 float b[2];
                 vkasRayQueryGetIntersectionBarycentrics(q.get(), VK_FALSE, b);
                 const uint32_t prim = uint32_t(vkasRayQueryGetIntersectionPrimitiveIndex(q.get(), VK_FALSE));
-                if (s.opaque(prim, b[0], b[1])) vkasRayQueryConfirmIntersection(q.get());
+                if (!alphaTest || s.opaque(prim, b[0], b[1])) vkasRayQueryConfirmIntersection(q.get());
             }
             if (vkasRayQueryGetIntersectionType(q.get(), VK_TRUE) == VKAS_COMMITTED_INTERSECTION_TRIANGLE) {
                 float b[2];
@@ -959,9 +960,9 @@ int main(int argc, char** argv) {
                     return threads == 1 ? traceBatch(d1, t1, anyHit, rays, h) : traceBatch(dN, tN, anyHit, rays, h);
                 };
             };
-            auto query = [&](VkAccelerationStructureKHR t1, VkAccelerationStructureKHR tN) -> Run {
-                return [&, t1, tN, anyHit](std::vector<Hit>& h, unsigned threads, uint64_t& c) {
-                    return traceRayQuery(scene, threads == 1 ? t1 : tN, anyHit, rays, h, threads, c);
+            auto query = [&](VkAccelerationStructureKHR t1, VkAccelerationStructureKHR tN, bool alphaTest = true) -> Run {
+                return [&, t1, tN, anyHit, alphaTest](std::vector<Hit>& h, unsigned threads, uint64_t& c) {
+                    return traceRayQuery(scene, threads == 1 ? t1 : tN, anyHit, rays, h, threads, c, alphaTest);
                 };
             };
             // 2. vkas + confirmation: the reference (the alpha at the very barycentrics)
@@ -970,6 +971,9 @@ int main(int argc, char** argv) {
             // (the alpha ignored: every quad opaque). What traversal alone costs on these quads.
             runners.push_back({Row{kind, "vkas no alpha (context)", anyHit ? "vkasTraceRays ANY_HIT" : "vkasTraceRays"},
                                batch(vk1, tlasConfirm1, vkN, tlasConfirmN), false, false});
+            // ... and through the ray-query loop confirming every candidate: the ray-query path's own cost.
+            runners.push_back({Row{kind, "vkas no alpha (context)", "vkasRayQuery* loop"},
+                               query(tlasConfirm1, tlasConfirmN, false), true, false});
             if (omm) {
                 // 1. vkas + 2-state micromap; 4. 4-state micromap + confirmation of the unknown micro-triangles
                 runners.push_back({Row{kind, "vkas micromap 2-state", anyHit ? "vkasTraceRays ANY_HIT" : "vkasTraceRays"},
