@@ -925,10 +925,13 @@ int main(int argc, char** argv) {
         }
         std::printf("\nbuilds, 1 thread (median of %d)     %10s %10s %12s %8s\n", o.reps, "ms", "Mtris/s", "bytes", "B/tri");
         for (const BuildRow& b : builds) {
-            const bool mm = b.what.find("micromap (") != std::string::npos;
-            std::printf("  %-42s %10.2f %10s %12.0f %8s\n", b.what.c_str(), b.ms,
-                        mm ? "-" : std::to_string(scene.triangles() / b.ms / 1000).substr(0, 6).c_str(), b.bytes,
-                        mm ? "-" : std::to_string(b.bytes / scene.triangles()).substr(0, 5).c_str());
+            const bool mm = b.what.find("micromap (") != std::string::npos;  // a micromap: no per-triangle rates
+            char rate[32] = "-", perTri[32] = "-";
+            if (!mm) {
+                std::snprintf(rate, sizeof rate, "%.3f", scene.triangles() / b.ms / 1000);
+                std::snprintf(perTri, sizeof perTri, "%.2f", b.bytes / scene.triangles());
+            }
+            std::printf("  %-42s %10.2f %10s %12.0f %8s\n", b.what.c_str(), b.ms, rate, b.bytes, perTri);
         }
         std::printf("  (the application's alpha data: %zu bytes of 2-state states, %zu bytes of micromap indices)\n",
                     scene.states2.size(), scene.ommIndex.size() * sizeof(uint32_t));
@@ -1075,7 +1078,10 @@ int main(int argc, char** argv) {
 
         if (!o.json.empty()) {
             std::ostringstream j;
-            j << "{\n  \"program\": \"vkas_bench_alpha\",\n  \"command\": " << jsonString(command) << ",\n  \"cpu\": "
+            char date[32] = "";
+            const std::time_t now = std::time(nullptr);
+            std::strftime(date, sizeof date, "%Y-%m-%dT%H:%M:%SZ", std::gmtime(&now));
+            j << "{\n  \"program\": \"vkas_bench_alpha\",\n  \"date\": " << jsonString(date) << ",\n  \"command\": " << jsonString(command) << ",\n  \"cpu\": "
               << jsonString(cpuModel()) << ",\n  \"hardware_threads\": " << std::thread::hardware_concurrency()
               << ",\n  \"threads\": " << o.threads << ",\n  \"rays_per_kind\": " << o.rays << ",\n  \"reps\": " << o.reps
               << ",\n  \"scene\": {\"quads\": " << scene.quads << ", \"triangles\": " << scene.triangles()
