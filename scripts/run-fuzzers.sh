@@ -6,7 +6,7 @@
 # Fails when a target reports a crash, a failed check, a leak, a timeout (-timeout per input) or too much memory
 # (-rss_limit_mb); the inputs that did it are kept in BUILD_DIR/fuzz-artifacts/. Prints the executions, the speed and
 # the coverage of each target; the last line is "fuzz: ..." (scripts/run-tests.sh records it).
-# Environment: VKAS_FUZZ_TARGETS (default "deserialize build"), VKAS_FUZZ_ARGS (more libFuzzer flags, e.g. -seed=1).
+# Environment: VKAS_FUZZ_TARGETS (default "deserialize build micromap"), VKAS_FUZZ_ARGS (more libFuzzer flags, e.g. -seed=1).
 set -uo pipefail
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 if (($# < 1)); then
@@ -15,7 +15,7 @@ if (($# < 1)); then
 fi
 build=$(cd "$1" && pwd) || exit 2
 seconds=${2:-45}
-targets=${VKAS_FUZZ_TARGETS:-deserialize build}
+targets=${VKAS_FUZZ_TARGETS:-deserialize build micromap}
 artifacts=$build/fuzz-artifacts
 mkdir -p "$artifacts"
 work=$(mktemp -d "${TMPDIR:-/tmp}/vkas-fuzz.XXXXXX")

@@ -72,6 +72,7 @@ VKAS_API void vkasGetFormatProperties(VkDevice device, VkFormat format, VkFormat
 #define VKAS_RAY_FLAG_CULL_NO_OPAQUE 0x80u
 #define VKAS_RAY_FLAG_SKIP_TRIANGLES 0x100u
 #define VKAS_RAY_FLAG_SKIP_AABBS 0x200u
+#define VKAS_RAY_FLAG_FORCE_OPACITY_MICROMAP_2_STATE 0x400u /* ForceOpacityMicromap2StateEXT (SPV_EXT_opacity_micromap) */
 
 /* OpRayQueryGetIntersectionTypeKHR results (SPIR-V RayQueryCommittedIntersectionType / CandidateIntersectionType). */
 #define VKAS_COMMITTED_INTERSECTION_NONE 0u

@@ -6,6 +6,7 @@
 
 #include "api/deferred_operation.hpp"
 #include "api/device.hpp"
+#include "api/micromap.hpp"
 #include "api/entry_points.hpp"
 #include "api/guard.hpp"
 #include "api/validate/build_infos.hpp"
@@ -37,11 +38,11 @@ VKAPI_ATTR VkResult VKAPI_CALL BuildAccelerationStructuresKHR(
             const auto* src = fromHandle<AccelerationStructure>(pInfos[i].srcAccelerationStructure);
             const std::byte* srcBlock = src ? src->block() : nullptr;
             RefitJob job{&pInfos[i], ppBuildRangeInfos[i], srcBlock, dst->block(), dst->size,
-                         resolveAccelerationStructure};
+                         resolveAccelerationStructure, resolveMicromap};
             r = srcBlock && job.dst ? refitAccelerationStructure(job) : VK_ERROR_UNKNOWN;
         } else {
             BuildJob job{&pInfos[i], ppBuildRangeInfos[i], dst->block(), dst->size, resolveAccelerationStructure,
-                         parallel};
+                         parallel, resolveMicromap};
             try {
                 r = buildAccelerationStructure(job);
             } catch (...) {

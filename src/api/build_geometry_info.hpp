@@ -17,6 +17,14 @@ inline const VkAccelerationStructureGeometryKHR* geometryAt(const VkAcceleration
     return info.ppGeometries ? info.ppGeometries[i] : nullptr;
 }
 
+// Whether every geometry of the info is there to read (validation reports a NULL one; what reads all of them waits).
+inline bool allGeometriesPresent(const VkAccelerationStructureBuildGeometryInfoKHR& info) {
+    if (info.geometryCount != 0 && !info.pGeometries && !info.ppGeometries) return false;
+    for (uint32_t g = 0; g < info.geometryCount; ++g)
+        if (!geometryAt(info, g)) return false;
+    return true;
+}
+
 inline format::StructureType structureType(VkAccelerationStructureTypeKHR t) {
     return t == VK_ACCELERATION_STRUCTURE_TYPE_TOP_LEVEL_KHR ? format::StructureType::TopLevel
                                                              : format::StructureType::BottomLevel;

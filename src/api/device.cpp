@@ -129,8 +129,8 @@ size_t Device::releaseAll() {
     // One pass per type, in dependency order, erasing as it goes; allocates nothing (vkasDestroyDevice cannot
     // fail). Each object is freed the way it was allocated (destroyObject: through its VkAllocationCallbacks, if any).
     const size_t n = objects_.size();
-    for (ObjectMagic type : {ObjectMagic::DeferredOperation, ObjectMagic::AccelerationStructure, ObjectMagic::Buffer,
-                             ObjectMagic::Memory}) {
+    for (ObjectMagic type : {ObjectMagic::DeferredOperation, ObjectMagic::AccelerationStructure, ObjectMagic::Micromap,
+                             ObjectMagic::Buffer, ObjectMagic::Memory}) {
         for (auto it = objects_.begin(); it != objects_.end();) {
             auto* p = const_cast<void*>(*it);
             if (*static_cast<ObjectMagic*>(p) != type) {
@@ -141,6 +141,7 @@ size_t Device::releaseAll() {
             switch (type) {
                 case ObjectMagic::DeferredOperation: destroyObject(static_cast<DeferredOperation*>(p)); break;
                 case ObjectMagic::AccelerationStructure: destroyObject(static_cast<AccelerationStructure*>(p)); break;
+                case ObjectMagic::Micromap: destroyObject(static_cast<Micromap*>(p)); break;
                 case ObjectMagic::Buffer: destroyObject(static_cast<Buffer*>(p)); break;
                 case ObjectMagic::Memory:
                     std::free(static_cast<Memory*>(p)->data);
@@ -185,7 +186,7 @@ extern "C" VKAS_API void vkasDestroyDevice(VkDevice device) {
     if (leaked != 0 && dev->validationEnabled()) {
         vkas::Validator v(dev, "vkDestroyDevice");
         v.fail("VUID-vkDestroyDevice-device-05137",
-               "%zu objects (buffers, memory or acceleration structures) created from device were not destroyed; "
+               "%zu objects (buffers, memory, acceleration structures or micromaps) created from device were not destroyed; "
                "vkas freed them.",
                leaked);
     }

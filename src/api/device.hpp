@@ -66,4 +66,5 @@ private:
 // The block of the bottom-level structure an instance's accelerationStructureReference names (or nullptr).
 const std::byte* resolveAccelerationStructure(uint64_t reference);
 
+
 }  // namespace vkas

@@ -58,4 +58,22 @@ VKAPI_ATTR void VKAPI_CALL GetDeviceAccelerationStructureCompatibilityKHR(VkDevi
                                                                           const VkAccelerationStructureVersionInfoKHR*,
                                                                           VkAccelerationStructureCompatibilityKHR*);
 
+// Micromaps, VK_EXT_opacity_micromap (micromap_commands.cpp, micromap_copy_commands.cpp).
+VKAPI_ATTR VkResult VKAPI_CALL CreateMicromapEXT(VkDevice, const VkMicromapCreateInfoEXT*, const VkAllocationCallbacks*,
+                                                 VkMicromapEXT*);
+VKAPI_ATTR void VKAPI_CALL DestroyMicromapEXT(VkDevice, VkMicromapEXT, const VkAllocationCallbacks*);
+VKAPI_ATTR void VKAPI_CALL GetMicromapBuildSizesEXT(VkDevice, VkAccelerationStructureBuildTypeKHR,
+                                                    const VkMicromapBuildInfoEXT*, VkMicromapBuildSizesInfoEXT*);
+VKAPI_ATTR VkResult VKAPI_CALL BuildMicromapsEXT(VkDevice, VkDeferredOperationKHR, uint32_t,
+                                                 const VkMicromapBuildInfoEXT*);
+VKAPI_ATTR VkResult VKAPI_CALL CopyMicromapEXT(VkDevice, VkDeferredOperationKHR, const VkCopyMicromapInfoEXT*);
+VKAPI_ATTR VkResult VKAPI_CALL CopyMicromapToMemoryEXT(VkDevice, VkDeferredOperationKHR,
+                                                       const VkCopyMicromapToMemoryInfoEXT*);
+VKAPI_ATTR VkResult VKAPI_CALL CopyMemoryToMicromapEXT(VkDevice, VkDeferredOperationKHR,
+                                                       const VkCopyMemoryToMicromapInfoEXT*);
+VKAPI_ATTR VkResult VKAPI_CALL WriteMicromapsPropertiesEXT(VkDevice, uint32_t, const VkMicromapEXT*, VkQueryType,
+                                                           size_t, void*, size_t);
+VKAPI_ATTR void VKAPI_CALL GetDeviceMicromapCompatibilityEXT(VkDevice, const VkMicromapVersionInfoEXT*,
+                                                             VkAccelerationStructureCompatibilityKHR*);
+
 }  // namespace vkas::entry

@@ -5,6 +5,7 @@
 #include "api/entry_points.hpp"
 #include "api/guard.hpp"
 #include "api/limits.hpp"
+#include "engine/format/micromap_layout.hpp"
 #include "engine/input/vertex_format.hpp"
 #include "engine/util/pnext_chain.hpp"
 
@@ -45,6 +46,16 @@ const ProcEntry kProcs[] = {
     VKAS_PROC("vkCopyMemoryToAccelerationStructureKHR", CopyMemoryToAccelerationStructureKHR),
     VKAS_PROC("vkWriteAccelerationStructuresPropertiesKHR", WriteAccelerationStructuresPropertiesKHR),
     VKAS_PROC("vkGetDeviceAccelerationStructureCompatibilityKHR", GetDeviceAccelerationStructureCompatibilityKHR),
+    // VK_EXT_opacity_micromap: the host commands (the vkCmd* ones need a device, like the structures' vkCmd*).
+    VKAS_PROC("vkCreateMicromapEXT", CreateMicromapEXT),
+    VKAS_PROC("vkDestroyMicromapEXT", DestroyMicromapEXT),
+    VKAS_PROC("vkGetMicromapBuildSizesEXT", GetMicromapBuildSizesEXT),
+    VKAS_PROC("vkBuildMicromapsEXT", BuildMicromapsEXT),
+    VKAS_PROC("vkCopyMicromapEXT", CopyMicromapEXT),
+    VKAS_PROC("vkCopyMicromapToMemoryEXT", CopyMicromapToMemoryEXT),
+    VKAS_PROC("vkCopyMemoryToMicromapEXT", CopyMemoryToMicromapEXT),
+    VKAS_PROC("vkWriteMicromapsPropertiesEXT", WriteMicromapsPropertiesEXT),
+    VKAS_PROC("vkGetDeviceMicromapCompatibilityEXT", GetDeviceMicromapCompatibilityEXT),
 };
 #undef VKAS_PROC
 
@@ -74,6 +85,12 @@ extern "C" VKAS_API void vkasGetAccelerationStructureFeatures(
             f->spheres = VK_TRUE;
             f->linearSweptSpheres = VK_TRUE;
         }
+        if (s->sType == VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_OPACITY_MICROMAP_FEATURES_EXT) {
+            auto* f = reinterpret_cast<VkPhysicalDeviceOpacityMicromapFeaturesEXT*>(s);
+            f->micromap = VK_TRUE;
+            f->micromapCaptureReplay = VK_FALSE;
+            f->micromapHostCommands = VK_TRUE;
+        }
     });
 }
 
@@ -89,6 +106,14 @@ extern "C" VKAS_API void vkasGetAccelerationStructureProperties(
     pProperties->maxDescriptorSetAccelerationStructures = l::kMaxDescriptorSetAccelerationStructures;
     pProperties->maxDescriptorSetUpdateAfterBindAccelerationStructures = 0;
     pProperties->minAccelerationStructureScratchOffsetAlignment = l::kMinScratchOffsetAlignment;
+    // Extension property structures the application chained, as vkGetPhysicalDeviceProperties2 would fill them.
+    vkas::forEachInChain<VkBaseOutStructure>(pProperties->pNext, [](VkBaseOutStructure* s) {
+        if (s->sType == VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_OPACITY_MICROMAP_PROPERTIES_EXT) {
+            auto* p = reinterpret_cast<VkPhysicalDeviceOpacityMicromapPropertiesEXT*>(s);
+            p->maxOpacity2StateSubdivisionLevel = vkas::format::kMaxOpacity2StateSubdivisionLevel;
+            p->maxOpacity4StateSubdivisionLevel = vkas::format::kMaxOpacity4StateSubdivisionLevel;
+        }
+    });
 }
 
 extern "C" VKAS_API void vkasGetFormatProperties(VkDevice, VkFormat format, VkFormatProperties* pFormatProperties) {

@@ -9,6 +9,7 @@
 #include "api/validate/geometry_info.hpp"
 #include "api/validate/parameters.hpp"
 #include "api/validate/structure_create_info.hpp"
+#include "engine/build/opacity_section_build.hpp"
 #include "engine/build/size_query.hpp"
 #include "engine/build/structure_build.hpp"
 #include "engine/format/sizes.hpp"
@@ -57,6 +58,9 @@ VKAPI_ATTR void VKAPI_CALL GetAccelerationStructureBuildSizesKHR(
     uint64_t primitives = 0;
     for (uint32_t g = 0; g < pBuildInfo->geometryCount; ++g) primitives += pMaxPrimitiveCounts[g];
     StructureSizes s = structureSizes(*pBuildInfo, primitives);
+    // [EXT-OMM] The room for the geometries' opacity micromaps (engine/format/opacity_section.hpp).
+    if (allGeometriesPresent(*pBuildInfo))
+        s.structureSize += opacitySectionBound(*pBuildInfo, [&](uint32_t g) { return pMaxPrimitiveCounts[g]; });
     pSizeInfo->accelerationStructureSize = s.structureSize;
     pSizeInfo->buildScratchSize = s.buildScratchSize;
     pSizeInfo->updateScratchSize = s.updateScratchSize;

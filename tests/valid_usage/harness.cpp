@@ -302,6 +302,7 @@ const std::vector<Case>& allCases() {
         addBuildCases(c);
         addCopyCases(c);
         addQueryCases(c);
+        addMicromapCases(c);
         return c;
     }();
     return cases;

@@ -51,6 +51,7 @@ void addObjectCases(std::vector<Case>& cases);
 void addBuildCases(std::vector<Case>& cases);
 void addCopyCases(std::vector<Case>& cases);
 void addQueryCases(std::vector<Case>& cases);
+void addMicromapCases(std::vector<Case>& cases);
 const std::vector<Case>& allCases();
 
 // A valid world the cases break one rule of: built structures, geometry, a second device for the -parent rules.

@@ -11,7 +11,7 @@ namespace {
 
 const char* yesNo(VkBool32 b) { return b ? "yes" : "no"; }
 
-// Vulkan commands of VK_KHR_acceleration_structure, VK_KHR_deferred_host_operations and the memory commands an
+// Vulkan commands of VK_KHR_acceleration_structure, VK_EXT_opacity_micromap, VK_KHR_deferred_host_operations and the memory commands an
 // application needs with them: `vkas info` says which of them this vkas implements.
 const char* const kCommands[] = {
     "vkGetDeviceProcAddr",
@@ -36,6 +36,15 @@ const char* const kCommands[] = {
     "vkCopyMemoryToAccelerationStructureKHR",
     "vkWriteAccelerationStructuresPropertiesKHR",
     "vkGetDeviceAccelerationStructureCompatibilityKHR",
+    "vkCreateMicromapEXT",
+    "vkDestroyMicromapEXT",
+    "vkGetMicromapBuildSizesEXT",
+    "vkBuildMicromapsEXT",
+    "vkCopyMicromapEXT",
+    "vkCopyMicromapToMemoryEXT",
+    "vkCopyMemoryToMicromapEXT",
+    "vkWriteMicromapsPropertiesEXT",
+    "vkGetDeviceMicromapCompatibilityEXT",
     "vkCreateDeferredOperationKHR",
     "vkDestroyDeferredOperationKHR",
     "vkGetDeferredOperationMaxConcurrencyKHR",
@@ -54,8 +63,9 @@ int runInfo(const InfoOptions& options) {
     std::printf("host threads: %u hardware threads; ray query state: %d bytes\n",
                 std::thread::hardware_concurrency(), VKAS_RAY_QUERY_SIZE);
 
+    VkPhysicalDeviceOpacityMicromapFeaturesEXT omm{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_OPACITY_MICROMAP_FEATURES_EXT};
     VkPhysicalDeviceRayTracingLinearSweptSpheresFeaturesNV lss{
-        VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_RAY_TRACING_LINEAR_SWEPT_SPHERES_FEATURES_NV};
+        VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_RAY_TRACING_LINEAR_SWEPT_SPHERES_FEATURES_NV, &omm};
     VkPhysicalDeviceAccelerationStructureFeaturesKHR f{
         VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_ACCELERATION_STRUCTURE_FEATURES_KHR, &lss};
     vkasGetAccelerationStructureFeatures(dev, &f);
@@ -70,12 +80,18 @@ int runInfo(const InfoOptions& options) {
     std::printf("  descriptorBindingAccelerationStructureUpdateAfterBind  %s\n",
                 yesNo(f.descriptorBindingAccelerationStructureUpdateAfterBind));
 
+    VkPhysicalDeviceOpacityMicromapPropertiesEXT ommLimits{
+        VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_OPACITY_MICROMAP_PROPERTIES_EXT};
     VkPhysicalDeviceAccelerationStructurePropertiesKHR p{
-        VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_ACCELERATION_STRUCTURE_PROPERTIES_KHR};
+        VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_ACCELERATION_STRUCTURE_PROPERTIES_KHR, &ommLimits};
     vkasGetAccelerationStructureProperties(dev, &p);
     std::printf("\nfeatures (VkPhysicalDeviceRayTracingLinearSweptSpheresFeaturesNV)\n");
     std::printf("  spheres                                                %s\n", yesNo(lss.spheres));
     std::printf("  linearSweptSpheres                                     %s\n", yesNo(lss.linearSweptSpheres));
+    std::printf("\nfeatures (VkPhysicalDeviceOpacityMicromapFeaturesEXT)\n");
+    std::printf("  micromap                                               %s\n", yesNo(omm.micromap));
+    std::printf("  micromapCaptureReplay                                  %s\n", yesNo(omm.micromapCaptureReplay));
+    std::printf("  micromapHostCommands                                   %s\n", yesNo(omm.micromapHostCommands));
     std::printf("\ngeometry and structure kinds: triangles, AABBs (ray queries, vkasTraceRaysProcedural), spheres and "
                 "linear swept spheres (VK_NV_ray_tracing_linear_swept_spheres), motion instances and motion triangles "
                 "(VK_NV_ray_tracing_motion_blur, vkasRayQueryInitializeMotion), position fetch "
@@ -98,6 +114,11 @@ int runInfo(const InfoOptions& options) {
                 p.maxDescriptorSetUpdateAfterBindAccelerationStructures);
     std::printf("  minAccelerationStructureScratchOffsetAlignment              %u\n",
                 p.minAccelerationStructureScratchOffsetAlignment);
+    std::printf("\nlimits (VkPhysicalDeviceOpacityMicromapPropertiesEXT)\n");
+    std::printf("  maxOpacity2StateSubdivisionLevel                            %u\n",
+                ommLimits.maxOpacity2StateSubdivisionLevel);
+    std::printf("  maxOpacity4StateSubdivisionLevel                            %u\n",
+                ommLimits.maxOpacity4StateSubdivisionLevel);
 
     // Every core format (VK_FORMAT_R4G4_UNORM_PACK8 .. VK_FORMAT_ASTC_12x12_SRGB_BLOCK).
     std::printf("\nvertex formats (VK_FORMAT_FEATURE_ACCELERATION_STRUCTURE_VERTEX_BUFFER_BIT_KHR)\n");

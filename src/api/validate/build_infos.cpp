@@ -9,9 +9,11 @@
 #include "api/limits.hpp"
 #include "api/validate/build_ranges.hpp"
 #include "api/validate/geometry_info.hpp"
+#include "api/validate/opacity_micromaps.hpp"
 #include "api/validate/parameters.hpp"
 #include "api/validate/swept_spheres.hpp"
 #include "api/validate/update.hpp"
+#include "engine/build/opacity_section_build.hpp"
 #include "engine/build/size_query.hpp"
 #include "engine/build/structure_build.hpp"
 #include "engine/format/layout.hpp"
@@ -19,6 +21,7 @@
 #include "engine/format/sizes.hpp"
 #include "engine/input/build_inputs.hpp"
 #include "engine/input/motion_inputs.hpp"
+#include "engine/input/opacity_micromaps.hpp"
 
 namespace vkas {
 
@@ -135,6 +138,8 @@ void checkBuildInfo(Validator& v, const Device& dev, const VkAccelerationStructu
             checkSweptSpheresRange(v, *geom, r, where, g);
         } else if (geom->geometryType == VK_GEOMETRY_TYPE_TRIANGLES_KHR) {
             checkTrianglesRange(v, geom->geometry.triangles, r, where, g);
+            if (const auto* omm = opacityMicromapOf(geom->geometry.triangles))
+                checkOpacityMicromapRange(v, dev, *omm, r.primitiveCount, where, g);
         } else if (geom->geometryType == VK_GEOMETRY_TYPE_INSTANCES_KHR) {
             if (!checkInstancesRange(v, dev, geom->geometry.instances, r, info.flags, where, footprint.referenced))
                 return;  // nothing is read from a build that large
@@ -142,6 +147,9 @@ void checkBuildInfo(Validator& v, const Device& dev, const VkAccelerationStructu
     }
     if (dst && info.type != VK_ACCELERATION_STRUCTURE_TYPE_GENERIC_KHR) {
         StructureSizes sizes = structureSizes(info, total);
+        // [EXT-OMM] The room for the geometries' opacity micromaps (engine/format/opacity_section.hpp).
+        if (allGeometriesPresent(info))
+            sizes.structureSize += opacitySectionBound(info, [&](uint32_t g) { return ranges[g].primitiveCount; });
         // An update may also go into a structure of the source's compacted size: a refit writes usedSize bytes.
         const uint64_t needed =
             updateSrc ? std::min(sizes.structureSize, format::header(updateSrc)->usedSize) : sizes.structureSize;

@@ -5,11 +5,13 @@
 
 #include "api/build_geometry_info.hpp"
 #include "api/limits.hpp"
+#include "api/validate/opacity_micromaps.hpp"
 #include "api/validate/parameters.hpp"
 #include "api/validate/swept_spheres.hpp"
 #include "engine/format/motion.hpp"
 #include "engine/input/build_inputs.hpp"
 #include "engine/input/motion_inputs.hpp"
+#include "engine/input/opacity_micromaps.hpp"
 #include "engine/input/vertex_format.hpp"
 
 namespace vkas {
@@ -22,7 +24,10 @@ constexpr VkBuildAccelerationStructureFlagsKHR kKnownBuildFlags =
     VK_BUILD_ACCELERATION_STRUCTURE_ALLOW_UPDATE_BIT_KHR | VK_BUILD_ACCELERATION_STRUCTURE_ALLOW_COMPACTION_BIT_KHR |
     VK_BUILD_ACCELERATION_STRUCTURE_PREFER_FAST_TRACE_BIT_KHR | VK_BUILD_ACCELERATION_STRUCTURE_PREFER_FAST_BUILD_BIT_KHR |
     VK_BUILD_ACCELERATION_STRUCTURE_LOW_MEMORY_BIT_KHR | VK_BUILD_ACCELERATION_STRUCTURE_MOTION_BIT_NV |
-    VK_BUILD_ACCELERATION_STRUCTURE_ALLOW_DATA_ACCESS_KHR;
+    VK_BUILD_ACCELERATION_STRUCTURE_ALLOW_DATA_ACCESS_KHR |
+    VK_BUILD_ACCELERATION_STRUCTURE_ALLOW_OPACITY_MICROMAP_UPDATE_EXT |
+    VK_BUILD_ACCELERATION_STRUCTURE_ALLOW_DISABLE_OPACITY_MICROMAPS_EXT |
+    VK_BUILD_ACCELERATION_STRUCTURE_ALLOW_OPACITY_MICROMAP_DATA_UPDATE_EXT;
 constexpr VkIndexType kIndexTypeUint8 = VkIndexType(1000265000);  // VK_INDEX_TYPE_UINT8 (Vulkan 1.4)
 
 // A VkFormat value of Vulkan 1.3 core (formats of extensions vkas does not enable are not valid values).
@@ -45,6 +50,12 @@ void checkGeometryInfo(Validator& v, const VkAccelerationStructureBuildGeometryI
     v.check((info.flags & ~kKnownBuildFlags) == 0, "VUID-VkAccelerationStructureBuildGeometryInfoKHR-flags-parameter",
             "%s.flags 0x%x has bits that are not VkBuildAccelerationStructureFlagBitsKHR of an enabled extension.",
             where, info.flags);
+    // [EXT-OMM] "If flags has the VK_BUILD_ACCELERATION_STRUCTURE_ALLOW_OPACITY_MICROMAP_UPDATE_BIT_KHR bit set then
+    // it must not have the VK_BUILD_ACCELERATION_STRUCTURE_ALLOW_OPACITY_MICROMAP_DATA_UPDATE_EXT bit set"
+    v.check(!((info.flags & VK_BUILD_ACCELERATION_STRUCTURE_ALLOW_OPACITY_MICROMAP_UPDATE_EXT) &&
+              (info.flags & VK_BUILD_ACCELERATION_STRUCTURE_ALLOW_OPACITY_MICROMAP_DATA_UPDATE_EXT)),
+            "VUID-VkAccelerationStructureBuildGeometryInfoKHR-flags-11558",
+            "%s.flags has both ALLOW_OPACITY_MICROMAP_UPDATE and ALLOW_OPACITY_MICROMAP_DATA_UPDATE.", where);
     v.check(info.type == VK_ACCELERATION_STRUCTURE_TYPE_TOP_LEVEL_KHR ||
                 info.type == VK_ACCELERATION_STRUCTURE_TYPE_BOTTOM_LEVEL_KHR ||
                 info.type == VK_ACCELERATION_STRUCTURE_TYPE_GENERIC_KHR,
@@ -125,10 +136,13 @@ void checkGeometryInfo(Validator& v, const VkAccelerationStructureBuildGeometryI
             {
                 char name[48];
                 std::snprintf(name, sizeof name, "%s geometry %u: triangles", where, g);
-                checkNextChain(v, t.pNext, {VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_GEOMETRY_MOTION_TRIANGLES_DATA_NV},
+                checkNextChain(v, t.pNext,
+                               {VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_GEOMETRY_MOTION_TRIANGLES_DATA_NV,
+                                VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_TRIANGLES_OPACITY_MICROMAP_EXT},
                                "VUID-VkAccelerationStructureGeometryTrianglesDataKHR-pNext-pNext",
                                "VUID-VkAccelerationStructureGeometryTrianglesDataKHR-sType-unique", name);
             }
+            if (const auto* omm = opacityMicromapOf(t)) checkOpacityMicromapStructure(v, *omm, where, g);
             const VertexFormatInfo* fmt = vertexFormatInfo(t.vertexFormat);
             if (v.check(isFormatValue(t.vertexFormat),
                         "VUID-VkAccelerationStructureGeometryTrianglesDataKHR-vertexFormat-parameter",

@@ -23,7 +23,8 @@ void checkBufferCreateInfo(Validator& v, const VkBufferCreateInfo& ci) {
         VK_BUFFER_USAGE_INDEX_BUFFER_BIT | VK_BUFFER_USAGE_VERTEX_BUFFER_BIT | VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT |
         VK_BUFFER_USAGE_SHADER_DEVICE_ADDRESS_BIT |
         VK_BUFFER_USAGE_ACCELERATION_STRUCTURE_BUILD_INPUT_READ_ONLY_BIT_KHR |
-        VK_BUFFER_USAGE_ACCELERATION_STRUCTURE_STORAGE_BIT_KHR | VK_BUFFER_USAGE_SHADER_BINDING_TABLE_BIT_KHR;
+        VK_BUFFER_USAGE_ACCELERATION_STRUCTURE_STORAGE_BIT_KHR | VK_BUFFER_USAGE_SHADER_BINDING_TABLE_BIT_KHR |
+        VK_BUFFER_USAGE_MICROMAP_BUILD_INPUT_READ_ONLY_BIT_EXT | VK_BUFFER_USAGE_MICROMAP_STORAGE_BIT_EXT;
     v.check((ci.usage & ~kKnownUsage) == 0, "VUID-VkBufferCreateInfo-usage-parameter",
             "pCreateInfo->usage 0x%x has bits that are not VkBufferUsageFlagBits of an enabled extension.", ci.usage);
     v.check(ci.usage != 0, "VUID-VkBufferCreateInfo-usage-requiredbitmask", "pCreateInfo->usage is 0.");

@@ -10,6 +10,7 @@ const char* objectTypeName(ObjectMagic magic) {
         case ObjectMagic::Buffer: return "VkBuffer";
         case ObjectMagic::AccelerationStructure: return "VkAccelerationStructureKHR";
         case ObjectMagic::DeferredOperation: return "VkDeferredOperationKHR";
+        case ObjectMagic::Micromap: return "VkMicromapEXT";
         default: return "object";
     }
 }

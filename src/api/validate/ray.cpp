@@ -39,11 +39,8 @@ bool validateRay(Validator& v, const AccelerationStructure* tlas, uint32_t rayFl
     ok &= v.check(atMostOneBit(rayFlags & kTriangleGroup), "VUID-RuntimeSpirv-OpRayQueryInitializeKHR-06890",
                   "%sRayFlags 0x%x has more than one of SkipTriangles, CullBackFacing and CullFrontFacing.", where,
                   rayFlags);
-    // ForceOpacityMicromap2StateEXT (0x400) needs the RayTracingOpacityMicromapKHR capability, which vkas lacks.
-    ok &= v.check(!(rayFlags & 0x400u), "VUID-RuntimeSpirv-RayTracingOpacityMicromapKHR-11542",
-                  "%sRayFlags 0x%x has ForceOpacityMicromap2State, which needs the RayTracingOpacityMicromapKHR "
-                  "capability.",
-                  where, rayFlags);
+    // ForceOpacityMicromap2StateEXT (0x400) needs the RayTracingOpacityMicromapKHR capability (VUID 11542), which
+    // vkas's host ray queries have since VK_EXT_opacity_micromap (docs/VALIDATION.md): the flag is accepted.
     ok &= v.check(!((rayFlags & VKAS_RAY_FLAG_SKIP_TRIANGLES) && (rayFlags & VKAS_RAY_FLAG_SKIP_AABBS)),
                   "VUID-RuntimeSpirv-OpRayQueryInitializeKHR-06889",
                   "%sRayFlags 0x%x has both SkipTriangles and SkipAABBs.", where, rayFlags);

@@ -1,6 +1,9 @@
 #include "engine/build/refit.hpp"
 
+#include <cstring>
+
 #include "engine/build/kinds/kind.hpp"
+#include "engine/build/opacity_section_build.hpp"
 #include "engine/format/layout.hpp"
 #include "engine/format/motion.hpp"
 #include "engine/input/build_inputs.hpp"
@@ -11,6 +14,9 @@ namespace vkas {
 using namespace format;
 
 namespace {
+
+constexpr uint32_t kOpacityUpdateFlags = VK_BUILD_ACCELERATION_STRUCTURE_ALLOW_OPACITY_MICROMAP_UPDATE_EXT |
+                                         VK_BUILD_ACCELERATION_STRUCTURE_ALLOW_OPACITY_MICROMAP_DATA_UPDATE_EXT;
 
 const PrimitiveKind& kindOf(const Header* h) {
     return primitiveKind(h->type == uint32_t(StructureType::TopLevel), h->primitiveType,
@@ -40,7 +46,22 @@ VkResult refitAccelerationStructure(const RefitJob& job) {
     if (!refitShapeMatches(job)) return VK_ERROR_UNKNOWN;
     const Header* h = header(job.src);
     if (h->usedSize > job.dstSize) return VK_ERROR_UNKNOWN;
+    const bool rewritesMicromaps = h->opacityOffset != 0 && (h->buildFlags & kOpacityUpdateFlags);
+    // Lay out the new micromap section before anything is written: an update that cannot hold it changes nothing.
+    if (rewritesMicromaps && opacitySectionSize(*job.info, job.ranges, job.micromaps) > h->opacityReserved)
+        return VK_ERROR_UNKNOWN;
+    const uint64_t opacityOffset = h->opacityOffset, opacityReserved = h->opacityReserved;
     kindOf(h).refit(job);
+    // [EXT-OMM] "If the original acceleration structure was built using opacity micromaps and
+    // VK_BUILD_ACCELERATION_STRUCTURE_ALLOW_OPACITY_MICROMAP_UPDATE_BIT_KHR was set in flags, the application must
+    // provide a micromap to the update operation" (with ALLOW_OPACITY_MICROMAP_DATA_UPDATE_BIT_EXT, "a micromap
+    // matching the original micromap in structure with only opacity values updated"): the section is copied again
+    // from it. Without either flag the application provides the original micromap, whose copy the structure holds.
+    if (rewritesMicromaps) {
+        const uint64_t written =
+            writeOpacitySection(*job.info, job.ranges, job.micromaps, job.dst, opacityOffset, opacityReserved);
+        std::memset(job.dst + opacityOffset + written, 0, opacityReserved - written);
+    }
     return VK_SUCCESS;
 }
 

@@ -5,8 +5,9 @@
 // way a build fetches it. Node boxes are then recomputed bottom-up (nodes are numbered in preorder, so a reverse
 // sweep sees every child before its parent) and the header's bounds become the root's. The refit reads the source
 // only in [0, usedSize) and writes the destination only in [0, usedSize): a compacted structure (a byte copy of
-// that range) updates like the original. It needs no scratch memory and no allocation; it runs on the calling
-// thread, so its bytes never depend on threading. See docs/FORMAT.md, "Update (refit)".
+// that range) updates like the original. It needs no scratch memory and no allocation (except the table of the
+// micromap triangles an update of opacity micromaps copies); it runs on the calling thread, so its bytes never
+// depend on threading. See docs/FORMAT.md, "Update (refit)".
 #pragma once
 
 #include <vulkan/vulkan_core.h>
@@ -15,6 +16,7 @@
 #include <cstdint>
 
 #include "engine/format/layout.hpp"
+#include "engine/format/micromap_layout.hpp"
 
 namespace vkas {
 
@@ -25,6 +27,7 @@ struct RefitJob {
     std::byte* dst;                                           // the destination block
     uint64_t dstSize;                                         // bytes available at dst
     BlasResolver resolver;
+    MicromapResolver micromaps = nullptr;  // [EXT-OMM] the micromaps an update that may change them names
 };
 
 // Whether the inputs have the source's shape: structure type, geometry count, each geometry's type and

@@ -6,6 +6,7 @@
 #include <cstring>
 
 #include "engine/build/kinds/kind.hpp"
+#include "engine/build/opacity_section_build.hpp"
 #include "engine/build/refit.hpp"
 #include "engine/build/size_query.hpp"
 #include "engine/build/tree_builder.hpp"
@@ -23,14 +24,15 @@ namespace {
 
 void writeHeader(std::byte* dst, StructureType type, VkGeometryTypeKHR primitiveType,
                  const VkAccelerationStructureBuildGeometryInfoKHR& info, uint64_t primitiveCount,
-                 const BvhBuildResult& tree, uint32_t recordCount, const StructureLayout& layout) {
+                 const BvhBuildResult& tree, uint32_t recordCount, const StructureLayout& layout, uint64_t usedSize,
+                 uint64_t opacityOffset, uint64_t opacityReserved) {
     Header h;
     std::memset(&h, 0, sizeof h);
     h.magic = kMagic;
     h.version = kVersion;
     h.type = uint32_t(type);
     h.buildFlags = info.flags;
-    h.usedSize = layout.end;
+    h.usedSize = usedSize;
     h.root = tree.root;
     h.bounds[0] = tree.bounds.lower.x, h.bounds[1] = tree.bounds.lower.y, h.bounds[2] = tree.bounds.lower.z;
     h.bounds[3] = tree.bounds.upper.x, h.bounds[4] = tree.bounds.upper.y, h.bounds[5] = tree.bounds.upper.z;
@@ -42,6 +44,8 @@ void writeHeader(std::byte* dst, StructureType type, VkGeometryTypeKHR primitive
     h.nodeOffset = layout.nodeOffset;
     h.recordOffset = layout.recordOffset;
     h.primitiveType = primitiveType;
+    h.opacityOffset = opacityOffset;
+    h.opacityReserved = opacityReserved;
     std::memcpy(dst, &h, sizeof h);
 }
 
@@ -159,7 +163,9 @@ VkResult buildAccelerationStructure(const BuildJob& job) {
     const uint64_t total = primitiveTotal(job);
     const bool motion = usesMotionRecords(info);  // [NV-motion] MotionInstanceRecords / MotionTriangleRecords
     const VkGeometryTypeKHR primitiveType = recordPrimitiveType(info);
-    if (maxStructureSize(type, primitiveType, info.geometryCount, total, motion) > job.dstSize) return VK_ERROR_UNKNOWN;
+    const uint64_t opacityBound = opacitySectionBound(info, [&](uint32_t g) { return job.ranges[g].primitiveCount; });
+    if (maxStructureSize(type, primitiveType, info.geometryCount, total, motion) + opacityBound > job.dstSize)
+        return VK_ERROR_UNKNOWN;
 
     const PrimitiveKind& kind = primitiveKind(type == StructureType::TopLevel, primitiveType, motion);
     // Scratch: PrimRef[total], then the gathered records in input order (build/size_query.hpp).
@@ -188,9 +194,24 @@ VkResult buildAccelerationStructure(const BuildJob& job) {
                               copyInTreeOrder(size, records, temp, refs, begin, end);
                           });
     }
+    // [EXT-OMM] The opacity micromaps after the records. A build that lets updates change micromaps keeps the room
+    // its usage counts bound, so that an update can rewrite the section in place.
+    uint64_t usedSize = layout.end, opacityOffset = 0, opacityReserved = 0;
+    if (opacityBound != 0) {
+        opacityOffset = alignOpacity(layout.end);
+        std::memset(job.dst + layout.end, 0, opacityOffset - layout.end);
+        const uint64_t written = writeOpacitySection(info, job.ranges, job.micromaps, job.dst, opacityOffset,
+                                                     job.dstSize - opacityOffset);
+        if (written == UINT64_MAX) return VK_ERROR_UNKNOWN;
+        opacityReserved = written;
+        if (info.flags & VK_BUILD_ACCELERATION_STRUCTURE_ALLOW_OPACITY_MICROMAP_UPDATE_EXT)
+            opacityReserved = std::max(written, alignOpacity(opacityBound));
+        std::memset(job.dst + opacityOffset + written, 0, opacityReserved - written);
+        usedSize = opacityOffset + opacityReserved;
+    }
     writeGeometryDescs(job.dst, job);
     clearGaps(job.dst, info.geometryCount, tree.nodeCount, layout);
-    writeHeader(job.dst, type, primitiveType, info, total, tree, n, layout);
+    writeHeader(job.dst, type, primitiveType, info, total, tree, n, layout, usedSize, opacityOffset, opacityReserved);
     return VK_SUCCESS;
 }
 

@@ -9,6 +9,7 @@
 #include <cstdint>
 
 #include "engine/format/layout.hpp"
+#include "engine/format/micromap_layout.hpp"
 #include "engine/util/parallel_for.hpp"
 
 namespace vkas {
@@ -20,6 +21,7 @@ struct BuildJob {
     uint64_t dstSize;                                         // bytes available at dst
     BlasResolver resolver;
     const ParallelFor* parallel = nullptr;  // spreads the build over threads (deferred operations); output unchanged
+    MicromapResolver micromaps = nullptr;   // [EXT-OMM] the micromaps that triangle geometries name
 };
 
 // Returns VK_SUCCESS, or VK_ERROR_UNKNOWN when the destination cannot hold the result (nothing written then).

@@ -3,6 +3,7 @@
 #include <cstring>
 
 #include "engine/util/alongside.hpp"
+#include "engine/format/opacity_section.hpp"
 #include "engine/format/sizes.hpp"
 #include "engine/util/byte_io.hpp"
 #include <vector>
@@ -77,6 +78,49 @@ struct TreeWalk {
     }
 };
 
+// [EXT-OMM] The opacity-micromap section (opacity_section.hpp): every geometry block inside the section, one
+// primitive entry per primitive of its geometry, every entry's states inside its geometry's data. Sets hasBlock[g].
+const char* checkOpacitySection(const std::byte* block, const Header& h, std::vector<uint8_t>& hasBlock) {
+    hasBlock.assign(h.geometryCount, 0);
+    if (h.opacityOffset == 0) return h.opacityReserved == 0 ? nullptr : "opacityReserved without an opacity section";
+    if (h.type != uint32_t(StructureType::BottomLevel) || h.primitiveType != VK_GEOMETRY_TYPE_TRIANGLES_KHR)
+        return "an opacity section in a structure that is not a bottom level of triangles";
+    const uint64_t begin = h.opacityOffset, end = h.usedSize;
+    if (begin % 8 != 0 || begin < h.recordOffset || begin > end || h.opacityReserved > end - begin)
+        return "the opacity section is out of range";
+    if (uint64_t(h.geometryCount) * 8 > h.opacityReserved) return "the opacity directory does not fit its section";
+    const uint64_t sectionEnd = begin + h.opacityReserved;
+    for (uint32_t g = 0; g < h.geometryCount; ++g) {
+        const uint64_t at = load64(block + begin + 8ull * g);
+        if (at == 0) continue;
+        if (at % 8 != 0 || at < begin + 8ull * h.geometryCount || at > sectionEnd ||
+            sectionEnd - at < sizeof(OpacityGeometry))
+            return "an opacity geometry block is out of range";
+        OpacityGeometry og;
+        std::memcpy(&og, block + at, sizeof og);
+        const uint32_t primitives = load32(block + h.geometryOffset + uint64_t(g) * sizeof(GeometryDesc) +
+                                           offsetof(GeometryDesc, primitiveCount));
+        if (og.primitiveCount != primitives) return "an opacity geometry block's primitive count is not its geometry's";
+        const uint64_t primsAt = at + sizeof og;
+        if (uint64_t(og.primitiveCount) * sizeof(OpacityPrimitive) > sectionEnd - primsAt)
+            return "an opacity geometry block's primitives do not fit";
+        if (og.dataOffset < primsAt + uint64_t(og.primitiveCount) * sizeof(OpacityPrimitive) ||
+            og.dataOffset > sectionEnd || og.dataSize > sectionEnd - og.dataOffset)
+            return "an opacity geometry block's data is out of range";
+        for (uint32_t i = 0; i < og.primitiveCount; ++i) {
+            OpacityPrimitive p;
+            std::memcpy(&p, block + primsAt + uint64_t(i) * sizeof p, sizeof p);
+            if (!isOpacityFormat(p.format) || p.subdivisionLevel > maxOpacitySubdivisionLevel(p.format))
+                return "an opacity primitive has an invalid format or subdivision level";
+            const uint64_t bytes = opacityTriangleDataBytes(p.subdivisionLevel, p.format);
+            if (p.dataOffset > og.dataSize || bytes > og.dataSize - p.dataOffset)
+                return "an opacity primitive's states are outside its geometry's data";
+        }
+        hasBlock[g] = 1;
+    }
+    return nullptr;
+}
+
 }  // namespace
 
 CheckResult checkBlock(const std::byte* block, uint64_t size) {
@@ -122,6 +166,13 @@ CheckResult checkBlock(const std::byte* block, uint64_t size) {
         if (topLevel ? type != VK_GEOMETRY_TYPE_INSTANCES_KHR : type != h.primitiveType)
             return corrupt("a geometry's type does not match the structure's primitive type");
     }
+    if (format1 && (h.opacityOffset != 0 || h.opacityReserved != 0)) return corrupt("a format-1 block with micromaps");
+    std::vector<uint8_t> hasMicromaps;  // per geometry
+    if (const char* why = checkOpacitySection(block, h, hasMicromaps)) return corrupt(why);
+    // A triangle record that asks for its geometry's micromap must have one to read.
+    auto micromapMissing = [&](uint32_t flags, uint32_t geometry) {
+        return (flags & kTriangleMicromap) && !hasMicromaps[geometry];
+    };
     std::vector<ChildRef> leaves;
     // Tree: every node reached exactly once from the root, no deeper than the traversal stack allows, every leaf
     // inside the record array, the leaves covering recordCount records.
@@ -154,9 +205,11 @@ CheckResult checkBlock(const std::byte* block, uint64_t size) {
             const uint64_t at = leafFirst(ref) * kTriangleBytes;
             const uint32_t n = leafCount(ref);
             for (uint32_t l = 0; l < n; ++l) {
-                const uint32_t geometry =
-                    load32(records + at + 4 * (uint64_t(kTriangleRows + 1) * n + l)) & kGeometryIndexMask;
+                const uint32_t word = load32(records + at + 4 * (uint64_t(kTriangleRows + 1) * n + l));
+                const uint32_t geometry = word & kGeometryIndexMask;
                 if (geometry >= h.geometryCount) return corrupt("a record's geometryIndex is out of range");
+                if (micromapMissing(word >> kGeometryIndexBits, geometry))
+                    return corrupt("a triangle asks for an opacity micromap its geometry does not have");
                 if (load32(records + at + 4 * (uint64_t(kTriangleRows) * n + l)) >= primitivesOf(geometry))
                     return corrupt("a record's primitiveIndex is out of range");
             }
@@ -179,6 +232,8 @@ CheckResult checkBlock(const std::byte* block, uint64_t size) {
             const uint32_t geometry = load32(rec + at);
             if (geometry >= h.geometryCount) return corrupt("a record's geometryIndex is out of range");
             if (load32(rec + at + 4) >= primitivesOf(geometry)) return corrupt("a record's primitiveIndex is out of range");
+            if (h.primitiveType == VK_GEOMETRY_TYPE_TRIANGLES_KHR && micromapMissing(load32(rec + at + 8), geometry))
+                return corrupt("a triangle asks for an opacity micromap its geometry does not have");
         }
     }
     return {};

@@ -65,7 +65,13 @@ struct Header {
     // LINEAR_SWEPT_SPHERES_NV (1000429005). A bottom-level structure holds
     // one geometry type only (VUID 03792), so traversal branches on it once per instance, not per record.
     uint32_t primitiveType;
-    uint8_t reserved[256 - 100];
+    uint32_t reserved0;
+    // [EXT-OMM] The opacity micromaps of a bottom level of triangles (format/opacity_section.hpp): where their section
+    // starts and the bytes the build reserved for it (an update that changes micromaps rewrites it in place), or 0 and
+    // 0 when no geometry has one. Blocks written before micromaps have zeros here.
+    uint64_t opacityOffset;
+    uint64_t opacityReserved;
+    uint8_t reserved[256 - 120];
 };
 static_assert(sizeof(Header) == 256);
 
@@ -96,6 +102,8 @@ static_assert(sizeof(Node) == 256);
 constexpr uint32_t kTriangleOpaque = 0x1;      // the geometry's OPAQUE flag
 constexpr uint32_t kTriangleDegenerate = 0x2;  // kept for updates, never hit
 constexpr uint32_t kTriangleNoDuplicateAnyHit = 0x4;
+// [EXT-OMM] The geometry has an opacity micromap: the section at Header::opacityOffset decides the triangle's opacity.
+constexpr uint32_t kTriangleMicromap = 0x10;
 // AABB record flags: the same bits as for triangles.
 constexpr uint32_t kAabbOpaque = kTriangleOpaque;
 constexpr uint32_t kAabbNoDuplicateAnyHit = kTriangleNoDuplicateAnyHit;

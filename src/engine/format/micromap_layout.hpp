@@ -17,7 +17,7 @@ constexpr uint32_t kMicromapMagic = 0x4D4F'4B56u;  // "VKOM" read as little-endi
 constexpr uint32_t kMicromapVersion = 1;
 
 // The subdivision levels vkas accepts for both formats (VkPhysicalDeviceOpacityMicromapPropertiesEXT reports them):
-// 12, as NVIDIA's drivers report. A level-12 4-state triangle holds 4^12 states in 8 MiB.
+// 12, as NVIDIA's drivers report. A level-12 4-state triangle holds 4^12 states in 4 MiB.
 constexpr uint32_t kMaxOpacity2StateSubdivisionLevel = 12;
 constexpr uint32_t kMaxOpacity4StateSubdivisionLevel = 12;
 

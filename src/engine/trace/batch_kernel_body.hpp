@@ -21,8 +21,9 @@ struct Walk {
 // kFindTies (a ray of a packet, which meets the leaves in another order than it would alone), a triangle met at
 // exactly the committed t is noted in w.tied: the strict interval drops it, so the order decided between the two.
 template <bool kFindTies>
-static inline void testTriangleLeaf(Walk& w, const std::byte* records, format::ChildRef leafRef) {
-    const format::ConstTriangleLeaf leaf = format::triangleLeaf(records, format::leafFirst(leafRef), format::leafCount(leafRef));
+static inline void testTriangleLeaf(Walk& w, const std::byte* blas, format::ChildRef leafRef) {
+    const format::ConstTriangleLeaf leaf =
+        format::triangleLeaf(format::records(blas), format::leafFirst(leafRef), format::leafCount(leafRef));
     const uint32_t instanceFlags = w.instance->sbtOffsetAndFlags >> 24;
     for (uint32_t lane0 = 0; lane0 < leaf.n; lane0 += 4) {
         FourLaneEdges e;
@@ -32,7 +33,9 @@ static inline void testTriangleLeaf(Walk& w, const std::byte* records, format::C
             TriangleCandidate c;
             if (!leafLaneHit(leaf, lane0, lane, e, w.objectRay, c.hit)) continue;
             if (kFindTies && c.hit.t == w.tMax && w.committed->type != kCommittedNone) w.tied = true;
-            if (!acceptTriangleHit(w.tMin, w.tMax, w.flags, instanceFlags, leaf.flags(lane0 + lane), c)) continue;
+            if (!acceptTriangleHit(w.tMin, w.tMax, w.flags, instanceFlags, leaf.flags(lane0 + lane),
+                                   leafTriangleId(blas, leaf, lane0 + lane), c))
+                continue;
             float v[3][3];
             leaf.positions(lane0 + lane, v);
             setTriangleHit(*w.committed, kCommittedTriangle, c, leaf.geometryIndex(lane0 + lane),
@@ -90,8 +93,8 @@ static inline void walkTree(Walk& w, const format::Node* nodes, const ShearedRay
 template <bool kFindTies>
 struct TriangleLeaves {
     Walk& w;
-    const std::byte* records;
-    void operator()(format::ChildRef leaf, uint32_t) const { testTriangleLeaf<kFindTies>(w, records, leaf); }
+    const std::byte* blas;
+    void operator()(format::ChildRef leaf, uint32_t) const { testTriangleLeaf<kFindTies>(w, blas, leaf); }
 };
 
 // The bottom level an instance references, through the scratch's one-entry cache.
@@ -148,7 +151,7 @@ struct InstanceLeaves {
             if (!h) continue;
             enterInstance(w, inst);
             walkTree(w, format::nodes(blas), w.objectRay, h->root, s, sp,
-                     TriangleLeaves<kFindTies>{w, format::records(blas)});
+                     TriangleLeaves<kFindTies>{w, blas});
             if (w.done) return;
         }
     }

@@ -6,6 +6,7 @@
 #include <cstdint>
 
 #include "engine/format/layout.hpp"
+#include "engine/trace/opacity_micromap.hpp"
 #include "engine/trace/ray.hpp"
 #include "engine/trace/triangle_leaf_test.hpp"
 #include "engine/trace/triangle_test.hpp"
@@ -15,8 +16,10 @@ namespace vkas {
 constexpr uint32_t kRayOpaque = 0x1, kRayNoOpaque = 0x2, kRayTerminateOnFirstHit = 0x4;
 constexpr uint32_t kRayCullBack = 0x10, kRayCullFront = 0x20, kRayCullOpaque = 0x40, kRayCullNoOpaque = 0x80;
 constexpr uint32_t kRaySkipTriangles = 0x100, kRaySkipAabbs = 0x200;
+constexpr uint32_t kRayForceOpacityMicromap2State = 0x400;  // [EXT-OMM] SPV_EXT_opacity_micromap
 constexpr uint32_t kInstanceCullDisable = 0x1, kInstanceFlipFacing = 0x2, kInstanceForceOpaque = 0x4,
                    kInstanceForceNoOpaque = 0x8;
+constexpr uint32_t kInstanceForceOpacityMicromap2State = 0x10, kInstanceDisableOpacityMicromaps = 0x20;  // [EXT-OMM]
 
 // Opacity in the spec's order: the geometry's OPAQUE flag, overridden by the instance's FORCE_* flags,
 // overridden by the ray's Opaque / NoOpaque flags.
@@ -91,10 +94,34 @@ struct TriangleCandidate {
     bool opaque;
 };
 
+// Which triangle of which bottom level a candidate is: what an opacity micromap is looked up with.
+struct TriangleId {
+    const std::byte* blas;
+    uint32_t geometryIndex, primitiveIndex;
+};
+
+// The geometry's opacity before the instance and ray overrides: its OPAQUE flag or, "If the intersection candidate is
+// with a geometry with an associated opacity micromap and VK_GEOMETRY_INSTANCE_DISABLE_OPACITY_MICROMAPS_BIT_KHR is
+// not set in its instance", the micromap's verdict, which "is used to determine geometry opacity instead of the
+// VK_GEOMETRY_OPAQUE_BIT_KHR flag in the geometry". Returns false for Ignored: "If the result of the opacity micromap
+// operation is ignored, the candidate is considered neither opaque or non-opaque and execution instead proceeds with
+// enumerating the next candidate."
+inline bool geometryOpacity(uint32_t recordFlags, uint32_t instanceFlags, uint32_t rayFlags, const TriangleId& id,
+                            const TriangleHit& hit, bool& opaque) {
+    opaque = (recordFlags & format::kTriangleOpaque) != 0;
+    if (!(recordFlags & format::kTriangleMicromap) || (instanceFlags & kInstanceDisableOpacityMicromaps)) return true;
+    const bool force2State =
+        (instanceFlags & kInstanceForceOpacityMicromap2State) || (rayFlags & kRayForceOpacityMicromap2State);
+    const MicromapOpacity m = micromapOpacity(id.blas, id.geometryIndex, id.primitiveIndex, hit.b, hit.c, force2State);
+    if (m == MicromapOpacity::Ignored) return false;
+    opaque = m == MicromapOpacity::Opaque;
+    return true;
+}
+
 // What follows the intersection: the t interval (exclusive for triangles), the facing culls (unless the instance
 // disables culling) and opacity, for a triangle with record flags `recordFlags` that the ray covers at `out.hit`.
 inline bool acceptTriangleHit(float tMin, float tMax, uint32_t rayFlags, uint32_t instanceFlags, uint32_t recordFlags,
-                              TriangleCandidate& out) {
+                              const TriangleId& id, TriangleCandidate& out) {
     if (!(out.hit.t > tMin && out.hit.t < tMax)) return false;  // strict for triangles
     bool front = out.hit.frontFace;
     if (instanceFlags & kInstanceFlipFacing) front = !front;
@@ -103,7 +130,9 @@ inline bool acceptTriangleHit(float tMin, float tMax, uint32_t rayFlags, uint32_
         if ((rayFlags & kRayCullFront) && front) return false;
     }
     out.frontFace = front;
-    out.opaque = resolveOpacity((recordFlags & format::kTriangleOpaque) != 0, instanceFlags, rayFlags);
+    bool opaque;
+    if (!geometryOpacity(recordFlags, instanceFlags, rayFlags, id, out.hit, opaque)) return false;
+    out.opaque = resolveOpacity(opaque, instanceFlags, rayFlags);
     return !culledByOpacity(out.opaque, rayFlags);
 }
 
@@ -112,10 +141,10 @@ inline bool acceptTriangleHit(float tMin, float tMax, uint32_t rayFlags, uint32_
 // covered (watertight test), not culled by facing nor by opacity. The batch kernel's four-lane leaf test
 // (triangle_leaf_test.hpp) makes the same decision with the intersection's edge functions computed four at a time.
 inline bool triangleCandidate(const ShearedRay& r, float tMin, float tMax, uint32_t rayFlags, uint32_t instanceFlags,
-                              uint32_t recordFlags, const float (*v)[3], TriangleCandidate& out) {
+                              uint32_t recordFlags, const TriangleId& id, const float (*v)[3], TriangleCandidate& out) {
     if (recordFlags & format::kTriangleDegenerate) return false;
     if (!intersectTriangle(r, v[0], v[1], v[2], out.hit)) return false;
-    return acceptTriangleHit(tMin, tMax, rayFlags, instanceFlags, recordFlags, out);
+    return acceptTriangleHit(tMin, tMax, rayFlags, instanceFlags, recordFlags, id, out);
 }
 
 // The same decision for lane `lane` of the four from `lane0` of a format-2 leaf that edgesOfFour left (its edge
@@ -127,11 +156,15 @@ inline bool leafLaneHit(const format::ConstTriangleLeaf& leaf, uint32_t lane0, u
     if (leaf.flags(lane0 + lane) & format::kTriangleDegenerate) return false;
     return laneIntersection(leaf, lane0, lane, e, r, hit);
 }
-inline bool leafLaneCandidate(const format::ConstTriangleLeaf& leaf, uint32_t lane0, uint32_t lane,
-                              const FourLaneEdges& e, const ShearedRay& r, float tMin, float tMax, uint32_t rayFlags,
-                              uint32_t instanceFlags, TriangleCandidate& out) {
+inline TriangleId leafTriangleId(const std::byte* blas, const format::ConstTriangleLeaf& leaf, uint32_t at) {
+    return {blas, leaf.geometryIndex(at), leaf.primitiveIndex()[at]};
+}
+inline bool leafLaneCandidate(const std::byte* blas, const format::ConstTriangleLeaf& leaf, uint32_t lane0,
+                              uint32_t lane, const FourLaneEdges& e, const ShearedRay& r, float tMin, float tMax,
+                              uint32_t rayFlags, uint32_t instanceFlags, TriangleCandidate& out) {
     return leafLaneHit(leaf, lane0, lane, e, r, out.hit) &&
-           acceptTriangleHit(tMin, tMax, rayFlags, instanceFlags, leaf.flags(lane0 + lane), out);
+           acceptTriangleHit(tMin, tMax, rayFlags, instanceFlags, leaf.flags(lane0 + lane),
+                             leafTriangleId(blas, leaf, lane0 + lane), out);
 }
 
 // Starts hit record `h` of `type` at t on `instance`, seen along the object-space ray `r`: no primitive yet, no

@@ -118,9 +118,9 @@ static inline void walkPacket(PacketWalk& p, const format::Node* nodes, const Pa
 // the single-ray test stops after one pass for those.)
 struct PacketTriangleLeaves {
     PacketWalk& p;
-    const std::byte* records;
+    const std::byte* blas;
     void operator()(format::ChildRef leaf, uint32_t lanes, uint32_t) const {
-        for (; lanes != 0; lanes &= lanes - 1) testTriangleLeaf<true>(p.ray[__builtin_ctz(lanes)], records, leaf);
+        for (; lanes != 0; lanes &= lanes - 1) testTriangleLeaf<true>(p.ray[__builtin_ctz(lanes)], blas, leaf);
         refreshPacketBounds(p);
     }
 };
@@ -139,7 +139,7 @@ struct PacketInstanceLeaves {
         for (; lanes != 0; lanes &= lanes - 1) {
             Walk& w = p.ray[__builtin_ctz(lanes)];
             walkTree(w, format::nodes(blas), w.objectRay, subtree, single, 0,
-                     TriangleLeaves<true>{w, format::records(blas)});
+                     TriangleLeaves<true>{w, blas});
         }
         refreshPacketBounds(p);
     }
@@ -159,7 +159,7 @@ struct PacketInstanceLeaves {
             const auto objectRay = [&](uint32_t l) -> const ShearedRay& { return p.ray[l].objectRay; };
             if (uint32_t(__builtin_popcount(lanes)) >= kPacketMinLanes && packetFrustum(objectRay, lanes, p.tMin, L, f)) {
                 walkPacket(p, format::nodes(blas), L, f, h->root, lanes, stack, sp,
-                           PacketTriangleLeaves{p, format::records(blas)},
+                           PacketTriangleLeaves{p, blas},
                            [&](format::ChildRef subtree, uint32_t alone) { walkAlone(blas, subtree, alone); });
             } else {
                 walkAlone(blas, h->root, lanes);

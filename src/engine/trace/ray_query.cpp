@@ -160,7 +160,7 @@ bool visitMotionTriangleLeaf(RayQueryState& q) {
         if (isDegenerateTriangle(v)) continue;
         TriangleCandidate c;
         if (!triangleCandidate(q.objectRay, q.tMin, q.tMax, q.flags, q.instance->sbtOffsetAndFlags >> 24,
-                               rec.base.flags, v, c))
+                               rec.base.flags, {q.bottomLevel, rec.base.geometryIndex, rec.base.primitiveIndex}, v, c))
             continue;
         if (takeTriangleCandidate(q, c, rec.base.geometryIndex, rec.base.primitiveIndex, v) ==
             TriangleOutcome::Candidate)
@@ -192,7 +192,7 @@ bool visitTriangleLeaf(RayQueryState& q) {
         q.leafLanes &= q.leafLanes - 1;
         const uint32_t at = q.leafLane0 + lane;
         TriangleCandidate c;
-        if (!leafLaneCandidate(leaf, q.leafLane0, lane, q.leafEdges, q.objectRay, q.tMin, q.tMax, q.flags, instanceFlags,
+        if (!leafLaneCandidate(q.bottomLevel, leaf, q.leafLane0, lane, q.leafEdges, q.objectRay, q.tMin, q.tMax, q.flags, instanceFlags,
                                c))
             continue;
         float v[3][3];

@@ -7,6 +7,7 @@
 #include <cstring>
 #include <optional>
 
+#include "engine/input/opacity_micromaps.hpp"
 #include "engine/build/kinds/kind.hpp"
 #include "engine/build/refit_tree.hpp"
 #include "engine/input/build_inputs.hpp"
@@ -45,7 +46,8 @@ uint32_t gatherMotionTriangles(const BuildJob& job, PrimRef* refs, std::byte* te
         if (geom.geometryType != VK_GEOMETRY_TYPE_TRIANGLES_KHR) continue;
         TriangleSource source(geom.geometry.triangles, job.ranges[g]);
         TriangleSource source1(trianglesAtTimeOne(geom.geometry.triangles), job.ranges[g]);
-        const uint32_t flags = kTriangleMotion | recordFlags(geom.flags);
+        const uint32_t flags = kTriangleMotion | recordFlags(geom.flags) |
+                               (opacityMicromapOf(geom.geometry.triangles) ? kTriangleMicromap : 0);  // [EXT-OMM]
         for (uint32_t i = 0; i < source.primitiveCount(); ++i) {
             MotionTriangleRecord rec;
             std::memset(&rec, 0, sizeof rec);

@@ -13,6 +13,7 @@
 #include "engine/build/kinds/kind.hpp"
 #include "engine/build/refit_tree.hpp"
 #include "engine/input/build_inputs.hpp"
+#include "engine/input/opacity_micromaps.hpp"
 #include "engine/input/triangles.hpp"
 #include "engine/util/parallel_for.hpp"
 
@@ -47,7 +48,10 @@ uint32_t gatherTriangles(const BuildJob& job, PrimRef* refs, std::byte* tempByte
         const Chunk& ch = chunks[c];
         const auto& geom = buildGeometry(info, ch.geometry);
         TriangleSource source(geom.geometry.triangles, job.ranges[ch.geometry]);
-        const uint32_t flags = recordFlags(geom.flags);
+        // [EXT-OMM] "If the geometry includes an opacity micromap, the intersection candidate is determined as opaque
+        // or non-opaque as described in Ray Opacity Micromap": the record says to look there.
+        const uint32_t flags =
+            recordFlags(geom.flags) | (opacityMicromapOf(geom.geometry.triangles) ? kTriangleMicromap : 0);
         // The reader specialised for the geometry's index type, vertex format and transform (no per-vertex dispatch).
         source.visit([&](auto reader) {
             for (uint32_t i = ch.begin; i < ch.end; ++i) {
