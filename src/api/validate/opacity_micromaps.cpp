@@ -159,9 +159,7 @@ void checkOpacityMicromapUpdate(Validator& v, const VkAccelerationStructureBuild
                                 const VkAccelerationStructureBuildRangeInfoKHR* ranges, const std::byte* src,
                                 const char* where) {
     const format::Header* h = format::header(src);
-    constexpr uint32_t kUpdateFlags = VK_BUILD_ACCELERATION_STRUCTURE_ALLOW_OPACITY_MICROMAP_UPDATE_EXT |
-                                      VK_BUILD_ACCELERATION_STRUCTURE_ALLOW_OPACITY_MICROMAP_DATA_UPDATE_EXT;
-    if (h->opacityOffset == 0 || !(h->buildFlags & kUpdateFlags)) return;
+    if (!updateRewritesMicromaps(*h)) return;
     // "[The application must not] Remove micromaps or VkOpacityMicromapSpecialIndexKHR values from a geometry which
     // previously had them, or vice versa": vkas holds every geometry to it, the triangles' records ask for them.
     if (!v.check(opacityPresenceMatches(info, src), "VUID-VkAccelerationStructureTrianglesOpacityMicromapEXT-micromap-vkasPresence",

@@ -45,6 +45,13 @@ uint64_t writeOpacitySection(const VkAccelerationStructureBuildGeometryInfoKHR& 
 uint64_t opacitySectionSize(const VkAccelerationStructureBuildGeometryInfoKHR& info,
                             const VkAccelerationStructureBuildRangeInfoKHR* ranges, MicromapResolver resolve);
 
+// Whether an update of the structure `block` copies its micromaps again: it has some, and its build allowed
+// ALLOW_OPACITY_MICROMAP_UPDATE or ALLOW_OPACITY_MICROMAP_DATA_UPDATE (without either, the copy is kept).
+inline bool updateRewritesMicromaps(const format::Header& h) {
+    return h.opacityOffset != 0 && (h.buildFlags & (VK_BUILD_ACCELERATION_STRUCTURE_ALLOW_OPACITY_MICROMAP_UPDATE_EXT |
+                                                    VK_BUILD_ACCELERATION_STRUCTURE_ALLOW_OPACITY_MICROMAP_DATA_UPDATE_EXT));
+}
+
 // Whether the geometries of `info` that have an opacity micromap are exactly those of `block`'s section: what an
 // update that rewrites the section needs (its triangle records keep asking their geometry's micromap).
 bool opacityPresenceMatches(const VkAccelerationStructureBuildGeometryInfoKHR& info, const std::byte* block);

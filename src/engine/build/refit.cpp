@@ -15,9 +15,6 @@ using namespace format;
 
 namespace {
 
-constexpr uint32_t kOpacityUpdateFlags = VK_BUILD_ACCELERATION_STRUCTURE_ALLOW_OPACITY_MICROMAP_UPDATE_EXT |
-                                         VK_BUILD_ACCELERATION_STRUCTURE_ALLOW_OPACITY_MICROMAP_DATA_UPDATE_EXT;
-
 const PrimitiveKind& kindOf(const Header* h) {
     return primitiveKind(h->type == uint32_t(StructureType::TopLevel), h->primitiveType,
                          motion::isMotionBuild(h->buildFlags));
@@ -46,7 +43,7 @@ VkResult refitAccelerationStructure(const RefitJob& job) {
     if (!refitShapeMatches(job)) return VK_ERROR_UNKNOWN;
     const Header* h = header(job.src);
     if (h->usedSize > job.dstSize) return VK_ERROR_UNKNOWN;
-    const bool rewritesMicromaps = h->opacityOffset != 0 && (h->buildFlags & kOpacityUpdateFlags);
+    const bool rewritesMicromaps = updateRewritesMicromaps(*h);
     // Lay out the new micromap section before anything is written: an update that cannot hold it changes nothing.
     if (rewritesMicromaps && (!opacityPresenceMatches(*job.info, job.src) ||
                               opacitySectionSize(*job.info, job.ranges, job.micromaps) > h->opacityReserved))
