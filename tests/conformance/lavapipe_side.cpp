@@ -83,6 +83,7 @@ struct Context {
     uint32_t maxDispatchGroups = 0;
     std::string description;
     bool positionFetch = false;
+    bool opacityMicromap = false;  // VK_EXT_opacity_micromap exposed with the micromap feature (never enabled)
 
     VkDescriptorSetLayout setLayout = VK_NULL_HANDLE;
     VkPipelineLayout pipelineLayout = VK_NULL_HANDLE;
@@ -217,6 +218,7 @@ bool Context::choosePhysicalDevice(std::string* why) {
             continue;
         }
         const bool fetchExtension = hasExtension(extensions, VK_KHR_RAY_TRACING_POSITION_FETCH_EXTENSION_NAME);
+        const bool micromapExtension = hasExtension(extensions, VK_EXT_OPACITY_MICROMAP_EXTENSION_NAME);
 
         VkPhysicalDeviceRayTracingPositionFetchFeaturesKHR fetch{
             VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_RAY_TRACING_POSITION_FETCH_FEATURES_KHR};
@@ -227,12 +229,18 @@ bool Context::choosePhysicalDevice(std::string* why) {
         VkPhysicalDeviceVulkan12Features v12{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES, &asFeatures};
         VkPhysicalDeviceFeatures2 features{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2, &v12};
         vkGetPhysicalDeviceFeatures2(pd, &features);
+        VkPhysicalDeviceOpacityMicromapFeaturesEXT micromap{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_OPACITY_MICROMAP_FEATURES_EXT};
+        if (micromapExtension) {
+            VkPhysicalDeviceFeatures2 micromapFeatures{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2, &micromap};
+            vkGetPhysicalDeviceFeatures2(pd, &micromapFeatures);
+        }
         if (!v12.bufferDeviceAddress || !asFeatures.accelerationStructure || !rayQuery.rayQuery) {
             reject("lacks the bufferDeviceAddress, accelerationStructure or rayQuery feature");
             continue;
         }
         physical = pd;
         positionFetch = fetchExtension && fetch.rayTracingPositionFetch;
+        opacityMicromap = micromapExtension && micromap.micromap;
         asProperties = as;
         asProperties.pNext = nullptr;
         maxDispatchGroups = props.properties.limits.maxComputeWorkGroupCount[0];
@@ -470,6 +478,8 @@ std::unique_ptr<LavapipeSide> LavapipeSide::create(std::string* why) {
 std::string LavapipeSide::deviceDescription() const { return impl_->context.description; }
 
 bool LavapipeSide::hasPositionFetch() const { return impl_->context.positionFetch; }
+
+bool LavapipeSide::hasOpacityMicromap() const { return impl_->context.opacityMicromap; }
 
 std::vector<VkFormat> LavapipeSide::vertexFormats() const { return impl_->vertexFormats; }
 

@@ -26,6 +26,9 @@ class LavapipeSide {
     std::string deviceDescription() const;
     // Whether rayTracingPositionFetch is enabled: otherwise Result::positionsValid is always 0.
     bool hasPositionFetch() const;
+    // Whether the device exposes VK_EXT_opacity_micromap with its micromap feature. Mesa 25.0.7's lavapipe does
+    // not, so the differential test has no micromap cases (docs/CONFORMANCE.md).
+    bool hasOpacityMicromap() const;
 
     // The vertex formats with VK_FORMAT_FEATURE_ACCELERATION_STRUCTURE_VERTEX_BUFFER_BIT_KHR.
     std::vector<VkFormat> vertexFormats() const;
