@@ -1,6 +1,6 @@
 // Writes the seed corpora of the fuzz targets: `vkas_fuzz_make_corpus <dir>` fills <dir>/deserialize (serialized
-// structures of every kind, motion ones included, and small ones of one primitive each, all written by the public
-// serialize command, handle arrays written as fuzz_deserialize's tokens) and <dir>/build (BuildSpec inputs
+// structures of every kind, motion ones and one with opacity micromaps included, and small ones of one primitive
+// each, all written by the public serialize command, handle arrays written as fuzz_deserialize's tokens) and <dir>/build (BuildSpec inputs
 // that decode to valid builds of every geometry type and mode). fuzz/corpus/ holds its output.
 #include <cstdio>
 #include <string>
@@ -115,6 +115,90 @@ int main(int argc, char** argv) {
                                        VK_BUILD_ACCELERATION_STRUCTURE_ALLOW_UPDATE_BIT_KHR);
         writeBlob(d, mesh, dir + "/deserialize/blas_mesh120.bin");
         d.destroyStructure(mesh);
+    }
+    {
+        // A bottom level that uses an opacity micromap (VK_EXT_opacity_micromap): its blob holds the opacity section
+        // (docs/FORMAT.md). Two micromap triangles, a 4-state one of level 2 and a 2-state one of level 1; four
+        // triangles with 16-bit micromap indices 0, 1, the special index -2 (fully opaque) and 1 again.
+#define FZ_LOAD(name) const auto name = reinterpret_cast<PFN_##name>(vkasGetDeviceProcAddr(d.device, #name));
+        FZ_LOAD(vkCreateBuffer)
+        FZ_LOAD(vkDestroyBuffer)
+        FZ_LOAD(vkAllocateMemory)
+        FZ_LOAD(vkFreeMemory)
+        FZ_LOAD(vkBindBufferMemory)
+        FZ_LOAD(vkCreateMicromapEXT)
+        FZ_LOAD(vkDestroyMicromapEXT)
+        FZ_LOAD(vkGetMicromapBuildSizesEXT)
+        FZ_LOAD(vkBuildMicromapsEXT)
+#undef FZ_LOAD
+        const uint8_t states[] = {0x1B, 0xE4, 0x6C, 0x39,  // 16 2-bit states of triangle 0 (level 2)
+                                  0x09};                   // 4 1-bit states of triangle 1 (level 1)
+        const VkMicromapTriangleEXT triangles[2] = {{0, 2, VK_OPACITY_MICROMAP_FORMAT_4_STATE_EXT},
+                                                    {4, 1, VK_OPACITY_MICROMAP_FORMAT_2_STATE_EXT}};
+        const VkMicromapUsageEXT usage[2] = {{1, 2, VK_OPACITY_MICROMAP_FORMAT_4_STATE_EXT},
+                                             {1, 1, VK_OPACITY_MICROMAP_FORMAT_2_STATE_EXT}};
+        VkMicromapBuildInfoEXT mb{VK_STRUCTURE_TYPE_MICROMAP_BUILD_INFO_EXT};
+        mb.type = VK_MICROMAP_TYPE_OPACITY_MICROMAP_EXT;
+        mb.mode = VK_BUILD_MICROMAP_MODE_BUILD_EXT;
+        mb.usageCountsCount = 2;
+        mb.pUsageCounts = usage;
+        mb.data.hostAddress = states;
+        mb.triangleArray.hostAddress = triangles;
+        mb.triangleArrayStride = sizeof(VkMicromapTriangleEXT);
+        VkMicromapBuildSizesInfoEXT sizes{VK_STRUCTURE_TYPE_MICROMAP_BUILD_SIZES_INFO_EXT};
+        vkGetMicromapBuildSizesEXT(d.device, VK_ACCELERATION_STRUCTURE_BUILD_TYPE_HOST_KHR, &mb, &sizes);
+        VkBufferCreateInfo bi{VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO};
+        bi.size = sizes.micromapSize;
+        bi.usage = VK_BUFFER_USAGE_MICROMAP_STORAGE_BIT_EXT;
+        VkBuffer buffer = VK_NULL_HANDLE;
+        FZ_CHECK(vkCreateBuffer(d.device, &bi, nullptr, &buffer) == VK_SUCCESS, "micromap buffer");
+        VkMemoryAllocateInfo ai{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO, nullptr, bi.size, 0};
+        VkDeviceMemory memory = VK_NULL_HANDLE;
+        FZ_CHECK(vkAllocateMemory(d.device, &ai, nullptr, &memory) == VK_SUCCESS, "micromap memory");
+        FZ_CHECK(vkBindBufferMemory(d.device, buffer, memory, 0) == VK_SUCCESS, "micromap bind");
+        VkMicromapCreateInfoEXT mc{VK_STRUCTURE_TYPE_MICROMAP_CREATE_INFO_EXT};
+        mc.buffer = buffer;
+        mc.size = sizes.micromapSize;
+        mc.type = VK_MICROMAP_TYPE_OPACITY_MICROMAP_EXT;
+        VkMicromapEXT micromap = VK_NULL_HANDLE;
+        FZ_CHECK(vkCreateMicromapEXT(d.device, &mc, nullptr, &micromap) == VK_SUCCESS, "create micromap");
+        fz::Region scratch(size_t(sizes.buildScratchSize) + 16);
+        mb.dstMicromap = micromap;
+        mb.scratchData.hostAddress = scratch.data;
+        FZ_CHECK(vkBuildMicromapsEXT(d.device, VK_NULL_HANDLE, 1, &mb) == VK_SUCCESS, "build micromap");
+
+        const float v[4][9] = {{-1, -1, 0, 1, -1, 0, 0, 1, 0},
+                               {-1, -1, 1, 1, -1, 1, 0, 1, 1},
+                               {-1, -1, 2, 1, -1, 2, 0, 1, 2},
+                               {-1, -1, 3, 1, -1, 3, 0, 1, 3}};
+        const uint16_t indices[4] = {0, 1, uint16_t(VK_OPACITY_MICROMAP_SPECIAL_INDEX_FULLY_OPAQUE_EXT), 1};
+        const VkMicromapUsageEXT blasUsage[2] = {{1, 2, VK_OPACITY_MICROMAP_FORMAT_4_STATE_EXT},
+                                                 {2, 1, VK_OPACITY_MICROMAP_FORMAT_2_STATE_EXT}};
+        VkAccelerationStructureTrianglesOpacityMicromapEXT omm{
+            VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_TRIANGLES_OPACITY_MICROMAP_EXT};
+        omm.indexType = VK_INDEX_TYPE_UINT16;
+        omm.indexBuffer.hostAddress = indices;
+        omm.indexStride = sizeof(uint16_t);
+        omm.usageCountsCount = 2;
+        omm.pUsageCounts = blasUsage;
+        omm.micromap = micromap;
+        VkAccelerationStructureGeometryKHR g{VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_GEOMETRY_KHR};
+        g.geometryType = VK_GEOMETRY_TYPE_TRIANGLES_KHR;
+        auto& t = g.geometry.triangles;
+        t.sType = VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_GEOMETRY_TRIANGLES_DATA_KHR;
+        t.pNext = &omm;
+        t.vertexFormat = VK_FORMAT_R32G32B32_SFLOAT;
+        t.vertexData.hostAddress = v;
+        t.vertexStride = 12;
+        t.maxVertex = 11;
+        t.indexType = VK_INDEX_TYPE_NONE_KHR;
+        Structure s1 = d.buildSimple(VK_ACCELERATION_STRUCTURE_TYPE_BOTTOM_LEVEL_KHR, g, 4,
+                                     VK_BUILD_ACCELERATION_STRUCTURE_ALLOW_OPACITY_MICROMAP_UPDATE_EXT);
+        writeBlob(d, s1, dir + "/deserialize/blas_opacity_micromap.bin");
+        d.destroyStructure(s1);
+        vkDestroyMicromapEXT(d.device, micromap, nullptr);
+        vkFreeMemory(d.device, memory, nullptr);
+        vkDestroyBuffer(d.device, buffer, nullptr);
     }
 
     // [NV-motion] The motion structures of the harness.
