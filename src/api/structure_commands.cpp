@@ -43,6 +43,13 @@ VKAPI_ATTR void VKAPI_CALL GetAccelerationStructureBuildSizesKHR(
                 v.check(pMaxPrimitiveCounts[0] <= limits::kMaxInstanceCount,
                         "VUID-vkGetAccelerationStructureBuildSizesKHR-pBuildInfo-03785",
                         "pMaxPrimitiveCounts[0] %u exceeds maxInstanceCount.", pMaxPrimitiveCounts[0]);
+            // The sizes of a bottom level of more primitives than maxPrimitiveCount would describe a structure that
+            // no build may make (and whose counts the format does not hold): reported as the build reports it.
+            if (pMaxPrimitiveCounts && pBuildInfo->geometryCount <= limits::kMaxGeometryCount) {
+                uint64_t total = 0;
+                for (uint32_t g = 0; g < pBuildInfo->geometryCount; ++g) total += pMaxPrimitiveCounts[g];
+                checkPrimitiveTotal(v, *pBuildInfo, total, "pBuildInfo");
+            }
         }
         if (v.check(pSizeInfo != nullptr, "VUID-vkGetAccelerationStructureBuildSizesKHR-pSizeInfo-parameter",
                     "pSizeInfo is NULL."))

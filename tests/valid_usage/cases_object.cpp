@@ -326,6 +326,20 @@ void addObjectCases(std::vector<Case>& c) {
         const uint32_t count = (1u << 24);  // maxInstanceCount is 2^24 - 1
         sizes(t, vk, dev, VK_ACCELERATION_STRUCTURE_BUILD_TYPE_HOST_KHR, &pb->info, &count, &sizeOutput());
     });
+    // The size query applies the build's maxPrimitiveCount rules to pMaxPrimitiveCounts (two geometries whose sum
+    // exceeds 2^29 - 1 although each alone does not).
+    CASE_V("VUID-VkAccelerationStructureBuildGeometryInfoKHR-type-03795", "size query", {
+        std::vector<VkAccelerationStructureGeometryKHR> g{t.tri->geometry, t.tri->geometry};
+        std::vector<VkAccelerationStructureBuildRangeInfoKHR> r{t.tri->range, t.tri->range};
+        auto pb = t.prepareBlas(g, r);
+        const uint32_t counts[2] = {1u << 28, 1u << 28};
+        sizes(t, vk, dev, VK_ACCELERATION_STRUCTURE_BUILD_TYPE_HOST_KHR, &pb->info, counts, &sizeOutput());
+    });
+    CASE_V("VUID-VkAccelerationStructureBuildGeometryInfoKHR-type-03794", "size query", {
+        auto pb = t.aabbBuild();
+        const uint32_t count = 1u << 29;
+        sizes(t, vk, dev, VK_ACCELERATION_STRUCTURE_BUILD_TYPE_HOST_KHR, &pb->info, &count, &sizeOutput());
+    });
     CASE("VUID-vkGetAccelerationStructureBuildSizesKHR-pSizeInfo-parameter", {
         auto pb = t.triangleBuild();
         const uint32_t count = 2;

@@ -117,16 +117,7 @@ void checkBuildInfo(Validator& v, const Device& dev, const VkAccelerationStructu
     if ((!ranges && info.geometryCount != 0) || info.geometryCount > limits::kMaxGeometryCount) return;
     uint64_t total = 0;
     for (uint32_t g = 0; g < info.geometryCount; ++g) total += ranges[g].primitiveCount;
-    if (info.type == VK_ACCELERATION_STRUCTURE_TYPE_BOTTOM_LEVEL_KHR) {
-        const VkAccelerationStructureGeometryKHR* first = info.geometryCount ? geometryAt(info, 0) : nullptr;
-        const bool aabbs = first && first->geometryType == VK_GEOMETRY_TYPE_AABBS_KHR;
-        if (!v.check(total <= limits::kMaxPrimitiveCount,
-                     aabbs ? "VUID-VkAccelerationStructureBuildGeometryInfoKHR-type-03794"
-                           : "VUID-VkAccelerationStructureBuildGeometryInfoKHR-type-03795",
-                     "%s: the geometries hold %llu %s, more than maxPrimitiveCount.", where, (ull)total,
-                     aabbs ? "AABBs" : "triangles"))
-            return;  // nothing is read from a build that large
-    }
+    if (!checkPrimitiveTotal(v, info, total, where)) return;  // nothing is read from a build that large
     for (uint32_t g = 0; g < info.geometryCount; ++g) {
         const VkAccelerationStructureGeometryKHR* geom = geometryAt(info, g);
         if (!geom) continue;

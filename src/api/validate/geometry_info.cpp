@@ -193,4 +193,20 @@ void checkGeometryInfo(Validator& v, const VkAccelerationStructureBuildGeometryI
     }
 }
 
+bool checkPrimitiveTotal(Validator& v, const VkAccelerationStructureBuildGeometryInfoKHR& info, uint64_t total,
+                         const char* where) {
+    if (info.type != VK_ACCELERATION_STRUCTURE_TYPE_BOTTOM_LEVEL_KHR || total <= limits::kMaxPrimitiveCount) return true;
+    // "If type is VK_ACCELERATION_STRUCTURE_TYPE_BOTTOM_LEVEL_KHR and the geometryType member of elements of either
+    // pGeometries or ppGeometries is VK_GEOMETRY_TYPE_AABBS_KHR, the total number of AABBs in all geometries must be
+    // less than or equal to VkPhysicalDeviceAccelerationStructurePropertiesKHR::maxPrimitiveCount" (03794; 03795
+    // says the same of triangles).
+    const VkAccelerationStructureGeometryKHR* first = info.geometryCount ? geometryAt(info, 0) : nullptr;
+    const bool aabbs = first && first->geometryType == VK_GEOMETRY_TYPE_AABBS_KHR;
+    return v.check(false,
+                   aabbs ? "VUID-VkAccelerationStructureBuildGeometryInfoKHR-type-03794"
+                         : "VUID-VkAccelerationStructureBuildGeometryInfoKHR-type-03795",
+                   "%s: the geometries hold %llu %s, more than maxPrimitiveCount (%llu).", where, (ull)total,
+                   aabbs ? "AABBs" : "primitives", (ull)limits::kMaxPrimitiveCount);
+}
+
 }  // namespace vkas

@@ -13,4 +13,10 @@ namespace vkas {
 // in messages, e.g. "pInfos[2]".
 void checkGeometryInfo(Validator& v, const VkAccelerationStructureBuildGeometryInfoKHR& info, const char* where);
 
+// A bottom level's primitives summed over its geometries (the ranges' primitiveCount in a build, pMaxPrimitiveCounts
+// in the size query) against maxPrimitiveCount (03794 AABBs, 03795 triangles and the other types): the limit is also
+// the format's (docs/FORMAT.md, "Limits"), so every count up to it fits the structure's fields. False when exceeded.
+bool checkPrimitiveTotal(Validator& v, const VkAccelerationStructureBuildGeometryInfoKHR& info, uint64_t total,
+                         const char* where);
+
 }  // namespace vkas
