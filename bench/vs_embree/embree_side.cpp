@@ -12,7 +12,11 @@ namespace vb {
 namespace {
 
 bool monitor(void* user, ssize_t bytes, bool /*post*/) {
-    static_cast<std::atomic<int64_t>*>(user)->fetch_add(bytes);
+    auto* m = static_cast<EmbreeEngine::MemoryMonitor*>(user);
+    const int64_t now = m->current.fetch_add(bytes) + bytes;
+    int64_t peak = m->peak.load();
+    while (now > peak && !m->peak.compare_exchange_weak(peak, now)) {
+    }
     return true;
 }
 
@@ -228,10 +232,12 @@ EmbreeEngine::Build EmbreeEngine::buildMesh(const Mesh& mesh, RTCBuildQuality qu
     for (int r = 0; r < reps; ++r) {
         RTCScene s = meshScene(mesh, quality, quality, RTC_SCENE_FLAG_NONE, mesh.vertices.data());
         const int64_t before = memory_.load();
+        memory_.peak.store(before);
         const auto t0 = std::chrono::steady_clock::now();
         commit(s);
         b.ms = std::min(b.ms, msSince(t0));
         b.bytes = memory_.load() - before;
+        b.peakBytes = std::max(b.peakBytes, memory_.peak.load() - before);
         rtcReleaseScene(s);
     }
     return b;

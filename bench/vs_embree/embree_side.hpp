@@ -24,6 +24,12 @@ public:
     struct Build {
         double ms = 0;      // best of the repetitions
         int64_t bytes = 0;  // memory the committed scene holds (memory monitor, net of the build's temporaries)
+        int64_t peakBytes = 0;  // buildMesh: the most the monitor saw allocated during the build (temporaries included)
+    };
+    // What Embree's memory monitor reports: bytes allocated now, and the most since `peak` was last set.
+    struct MemoryMonitor {
+        std::atomic<int64_t> current{0}, peak{0};
+        int64_t load() const { return current.load(); }
     };
 
     // rtcNewDevice("threads=N"); 0: Embree's default (all). Builds run on exactly N threads (a TBB arena of N).
@@ -63,7 +69,7 @@ private:
 
     unsigned threads_ = 0;
     RTCDevice device_ = nullptr;
-    std::atomic<int64_t> memory_{0};
+    MemoryMonitor memory_;
     RTCScene traceChild_ = nullptr, traceScene_ = nullptr;      // robust
     RTCScene defaultChild_ = nullptr, defaultScene_ = nullptr;  // the default flags
 };

@@ -88,6 +88,7 @@ const std::vector<SceneInfo>& sceneCatalogue() {
         {"bunny", "Stanford bunny, glmark2-data models/bunny.obj (69,666 triangles)"},
         {"bunny-1m", "the bunny after 2 midpoint subdivisions (1,114,656 triangles)"},
         {"bunny-4m", "the bunny after 3 midpoint subdivisions (4,458,624 triangles)"},
+        {"bunny-16m", "the bunny after 4 midpoint subdivisions (17,834,496 triangles; scaling runs, not in the default list)"},
         {"cgal-elephant", "CGAL data/meshes/refined_elephant.off (libcgal-demo, 88,928 triangles)"},
         {"cgal-armadillo", "CGAL data/meshes/armadillo.off (libcgal-demo, 52,000 triangles)"},
         {"torcs-forza", "TORCS road track forza.acc (torcs-data): long thin road and wall triangles"},
@@ -128,10 +129,10 @@ Scene makeScene(const std::string& name, bool isPath, const std::string& dataDir
         s.mesh = loadMesh(name);
         return s;
     }
-    if (name == "bunny" || name == "bunny-1m" || name == "bunny-4m" || name == "instances") {
+    if (name == "bunny" || name == "bunny-1m" || name == "bunny-4m" || name == "bunny-16m" || name == "instances") {
         s.source = kBunny;
         s.mesh = loadMesh(kBunny);
-        const int levels = name == "bunny-1m" ? 2 : name == "bunny-4m" ? 3 : 0;
+        const int levels = name == "bunny-1m" ? 2 : name == "bunny-4m" ? 3 : name == "bunny-16m" ? 4 : 0;
         for (int k = 0; k < levels; ++k) s.mesh = subdivide(s.mesh);
         if (name == "instances") s.instances = instanceGrid(meshBounds(s.mesh), instanceCount);
     } else if (name == "cgal-elephant" || name == "cgal-armadillo") {

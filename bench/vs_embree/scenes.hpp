@@ -16,7 +16,8 @@ Mesh loadMesh(const std::string& path);
 // Midpoint subdivision: every triangle becomes four (shared edge midpoints are shared vertices).
 Mesh subdivide(const Mesh& m);
 
-// The named scenes (`--scene`): bunny, bunny-1m, bunny-4m, cgal-elephant, cgal-armadillo, torcs-forza, instances.
+// The named scenes (`--scene`): bunny, bunny-1m, bunny-4m, bunny-16m (not in the default list: scaling runs),
+// cgal-elephant, cgal-armadillo, torcs-forza, instances.
 struct SceneInfo {
     const char* name;
     const char* what;

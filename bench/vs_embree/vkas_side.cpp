@@ -168,6 +168,7 @@ VkasEngine::Build VkasEngine::buildBottom(const Mesh& mesh, VkBuildAccelerationS
     b.compactedSize = compactedSize(b.s);
     b.usedSize = structureSize(b.s);
     b.sizeQuery = sizes.accelerationStructureSize;
+    b.scratchSize = sizes.buildScratchSize;
     return b;
 }
 
@@ -193,6 +194,7 @@ VkasEngine::Build VkasEngine::buildTop(const std::vector<Transform>& xs, VkAccel
     b.compactedSize = compactedSize(b.s);
     b.usedSize = structureSize(b.s);
     b.sizeQuery = sizes.accelerationStructureSize;
+    b.scratchSize = sizes.buildScratchSize;
     return b;
 }
 

@@ -28,6 +28,7 @@ public:
         uint64_t compactedSize = 0;  // vkWriteAccelerationStructuresPropertiesKHR, COMPACTED_SIZE
         uint64_t usedSize = 0;       // the same, ACCELERATION_STRUCTURE_SIZE (the built structure's size; 0: not known)
         uint64_t sizeQuery = 0;      // vkGetAccelerationStructureBuildSizesKHR's accelerationStructureSize (the buffer)
+        uint64_t scratchSize = 0;    // the same query's buildScratchSize (what the build was given)
     };
 
     explicit VkasEngine(uint32_t workerThreadCount);  // 0: all cores (vkasTraceRays' worker threads)
