@@ -92,7 +92,8 @@ Built build(std::vector<PrimRef> refs, const BvhBuildSettings& settings, const P
     const uint32_t n = uint32_t(refs.size());
     b.nodes.resize(std::max<uint64_t>(1, maxWideNodeCount(n, settings.maxLeafSize)));
     std::memset(b.nodes.data(), 0, b.nodes.size() * sizeof(Node));
-    b.result = buildTree(refs.data(), n, settings, b.nodes.data(), parallel);
+    std::vector<uint64_t> workspace(n * kTreeWorkspacePerPrimitive / 8 + 2);  // 16-byte aligned on this platform
+    b.result = buildTree(refs.data(), n, settings, b.nodes.data(), reinterpret_cast<std::byte*>(workspace.data()), parallel);
     b.nodes.resize(b.result.nodeCount);
     b.refs = std::move(refs);
     return b;

@@ -282,7 +282,7 @@ private:
 }  // namespace
 
 BvhBuildResult buildMortonBvh(PrimRef* refs, uint32_t n, uint32_t maxLeafSize, Node* nodes,
-                              const ParallelFor* /*parallel: serial for now*/) {
+                              std::byte* workspace, const ParallelFor* /*parallel: serial for now*/) {
     BvhBuildResult result;
     if (n == 0) return result;
     InputBounds input;
@@ -295,8 +295,8 @@ BvhBuildResult buildMortonBvh(PrimRef* refs, uint32_t n, uint32_t maxLeafSize, N
 
     const KeyLayout layout(n);
     const Quantizer quant(input, layout.axisBits);
-    std::unique_ptr<uint64_t[]> keyBuffer(new uint64_t[2 * uint64_t(n)]);
-    uint64_t* keys = keyBuffer.get();
+    // The workspace: the keys and the sort's second buffer (16 bytes a primitive), then the sorted PrimRefs.
+    uint64_t* keys = reinterpret_cast<uint64_t*>(workspace);
     uint64_t* other = keys + n;
     std::vector<uint32_t> topCount(1u << kTopBits, 0);
     makeKeys(refs, 0, n, quant, layout, keys, topCount.data());
@@ -314,11 +314,11 @@ BvhBuildResult buildMortonBvh(PrimRef* refs, uint32_t n, uint32_t maxLeafSize, N
         if (count) sortBucket(other + b, keys + b, other + b, count, layout);
     }
     // The references in sorted order; the leaves copy them back into refs.
-    std::unique_ptr<PrimRef[]> sorted(new PrimRef[n]);
+    PrimRef* sorted = reinterpret_cast<PrimRef*>(workspace + 16 * uint64_t(n));
     const uint64_t indexMask = layout.indexMask();
     for (uint32_t i = 0; i < n; ++i) sorted[i] = refs[keys[i] & indexMask];
 
-    TreeWriter writer(keys, layout.indexBits, sorted.get(), refs, nodes, maxLeafSize);
+    TreeWriter writer(keys, layout.indexBits, sorted, refs, nodes, maxLeafSize);
     SimdBoxNanSpreads rootBox;
     result.root = writer.build(Range{0, n, 0}, rootBox);
     result.nodeCount = writer.nodeCount();

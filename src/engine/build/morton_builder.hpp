@@ -14,6 +14,6 @@ namespace vkas {
 // maxWideNodeCount(n, maxLeafSize) of them, depth at most format::kMaxTreeDepth). It runs on the calling thread
 // (`parallel` is not used yet), so its bytes never depend on how a deferred operation is joined.
 BvhBuildResult buildMortonBvh(PrimRef* refs, uint32_t n, uint32_t maxLeafSize, format::Node* nodes,
-                              const ParallelFor* parallel = nullptr);
+                              std::byte* workspace, const ParallelFor* parallel = nullptr);
 
 }  // namespace vkas

@@ -468,7 +468,7 @@ private:
 }  // namespace
 
 BvhBuildResult buildSahBvh(PrimRef* refs, uint32_t n, const BvhBuildSettings& settings, Node* nodes,
-                           const ParallelFor* parallel) {
+                           std::byte* workspace, const ParallelFor* parallel) {
     BvhBuildResult result;
     if (n == 0) return result;
     Range all;
@@ -488,18 +488,18 @@ BvhBuildResult buildSahBvh(PrimRef* refs, uint32_t n, const BvhBuildSettings& se
     for (uint32_t c = 0; c < chunks; ++c) b.extend(bounds[c].lower, bounds[c].upper);
     all.bounds = b.aabb();
     result.bounds = all.bounds;
-    // Builds with large ranges partition those through a spare array, with threads or without: the same tree.
-    std::unique_ptr<PrimRef[]> spare;
-    if (n >= kStablePartitionMin) spare.reset(new PrimRef[n]);
+    // Builds with large ranges partition those through a spare array (the workspace), with threads or without: the
+    // same tree.
+    PrimRef* spare = n >= kStablePartitionMin ? reinterpret_cast<PrimRef*>(workspace) : nullptr;
     if (!parallel || n <= 2 * kParallelGrain) {
         WideBuilder builder(refs, settings, nodes);
-        builder.useSpare(spare.get());
+        builder.useSpare(spare);
         result.root = builder.build(all);
         result.nodeCount = builder.nodeCount();
         return result;
     }
     Subtree tree;
-    buildSubtree(refs, spare.get(), all, settings, *parallel, tree);
+    buildSubtree(refs, spare, all, settings, *parallel, tree);
     Assembler assembler(nodes, *parallel);
     result.root = assembler.place(tree, 0);
     result.nodeCount = uint32_t(tree.totalNodes);

@@ -13,6 +13,6 @@ namespace vkas {
 // With `parallel`, subtrees below a size threshold are built as independent tasks and then laid out in the
 // order the serial build uses, so the nodes and refs are byte-identical to a build without it.
 BvhBuildResult buildSahBvh(PrimRef* refs, uint32_t n, const BvhBuildSettings& settings, format::Node* nodes,
-                           const ParallelFor* parallel = nullptr);
+                           std::byte* workspace, const ParallelFor* parallel = nullptr);
 
 }  // namespace vkas

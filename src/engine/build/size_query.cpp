@@ -21,7 +21,8 @@ StructureSizes structureSizes(const VkAccelerationStructureBuildGeometryInfoKHR&
     s.structureSize = maxStructureSize(type, recordPrimitiveType(info), info.geometryCount, primitiveCount, motion);
     s.buildScratchSize = primitiveCount == 0
                              ? 0
-                             : kScratchAlignment + primitiveCount * (sizeof(PrimRef) + gatheredRecordSize(type, motion));
+                             : kScratchAlignment + primitiveCount * (sizeof(PrimRef) + gatheredRecordSize(type, motion) +
+                                                                     kTreeWorkspacePerPrimitive);
     s.updateScratchSize = 0;  // a refit works in the structure itself (build/refit.hpp)
     return s;
 }

@@ -1,6 +1,6 @@
 // What vkGetAccelerationStructureBuildSizesKHR reports: the format's largest structure for the inputs, and the
-// scratch memory a build of them uses (PrimRef[n] then temporary records[n], from the first 64-byte aligned
-// address of the scratch buffer).
+// scratch memory a build of them uses (PrimRef[n], the temporary records[n], then the tree builders' workspace,
+// kTreeWorkspacePerPrimitive bytes a primitive; from the first 64-byte aligned address of the scratch buffer).
 #pragma once
 
 #include <vulkan/vulkan_core.h>

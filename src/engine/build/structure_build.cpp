@@ -168,18 +168,22 @@ VkResult buildAccelerationStructure(const BuildJob& job) {
         return VK_ERROR_UNKNOWN;
 
     const PrimitiveKind& kind = primitiveKind(type == StructureType::TopLevel, primitiveType, motion);
-    // Scratch: PrimRef[total], then the gathered records in input order (build/size_query.hpp).
+    // Scratch: PrimRef[total], the gathered records in input order, the tree builders' workspace
+    // (build/size_query.hpp).
     PrimRef* refs = nullptr;
     std::byte* temp = nullptr;
+    std::byte* workspace = nullptr;
     if (total != 0) {
         refs = reinterpret_cast<PrimRef*>(alignedScratch(info));
         temp = reinterpret_cast<std::byte*>(refs + total);
+        workspace = temp + total * gatheredRecordSize(type, motion);
     }
     const uint32_t n = total != 0 ? kind.gather(job, refs, temp) : 0;
 
     const StructureLayout pre = structureLayout(type, primitiveType, info.geometryCount, 0, 0, motion);
     auto* nodes = reinterpret_cast<Node*>(job.dst + pre.nodeOffset);
-    const BvhBuildResult tree = buildTree(refs, n, buildSettingsFor(maxLeafSize(type), info.flags), nodes, job.parallel);
+    const BvhBuildResult tree = buildTree(refs, n, buildSettingsFor(maxLeafSize(type), info.flags), nodes, workspace,
+                                           job.parallel);
     const StructureLayout layout = structureLayout(type, primitiveType, info.geometryCount, tree.nodeCount, n, motion);
     // The records in tree order: leaf ranges of refs name their temp slots.
     std::byte* records = job.dst + layout.recordOffset;

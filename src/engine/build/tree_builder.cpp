@@ -17,9 +17,9 @@ BvhBuildSettings buildSettingsFor(uint32_t maxLeafSize, uint32_t buildFlags) {
 }
 
 BvhBuildResult buildTree(PrimRef* refs, uint32_t n, const BvhBuildSettings& settings, format::Node* nodes,
-                         const ParallelFor* parallel) {
-    if (settings.morton) return buildMortonBvh(refs, n, settings.maxLeafSize, nodes, parallel);
-    return buildSahBvh(refs, n, settings, nodes, parallel);
+                         std::byte* workspace, const ParallelFor* parallel) {
+    if (settings.morton) return buildMortonBvh(refs, n, settings.maxLeafSize, nodes, workspace, parallel);
+    return buildSahBvh(refs, n, settings, nodes, workspace, parallel);
 }
 
 }  // namespace vkas

@@ -50,9 +50,16 @@ struct BvhBuildResult {
     Aabb bounds;
 };
 
-// Builds over refs[0..n) (reordered in place) into nodes[0..nodeCount) with the builder `settings` names.
-// With `parallel`, the output is byte-identical to a build without it.
+// The builders' temporary memory per primitive, which the build takes from its scratch buffer (after the gathered
+// records: build/size_query.hpp) so that a build allocates nothing and an application that reuses its scratch
+// buffer pays no page faults for it: the SAH builder's stable-partition buffer (a PrimRef each), the Morton
+// builder's keys (two 8-byte words: the sort's two buffers) and sorted PrimRefs.
+constexpr uint64_t kTreeWorkspacePerPrimitive = 48;
+
+// Builds over refs[0..n) (reordered in place) into nodes[0..nodeCount) with the builder `settings` names;
+// `workspace` holds n * kTreeWorkspacePerPrimitive bytes, 16-byte aligned. With `parallel`, the output is
+// byte-identical to a build without it.
 BvhBuildResult buildTree(PrimRef* refs, uint32_t n, const BvhBuildSettings& settings, format::Node* nodes,
-                         const ParallelFor* parallel = nullptr);
+                         std::byte* workspace, const ParallelFor* parallel = nullptr);
 
 }  // namespace vkas

@@ -234,10 +234,28 @@ private:
     void batch(const Reader& reader, uint32_t g, const std::byte* src, std::byte* dst, const ChildRef refs[kNodeWidth],
                uint64_t recordCount, SimdBoxNanIgnored boxes[kNodeWidth]) {
         Pending pending[kBatch];
-        uint32_t n = 0;
+        PendingLeaf leaves[kNodeWidth];
+        uint32_t n = 0, leafN = 0;
         const uint32_t count = reader.primitiveCount();
         for (uint32_t i = 0; i < kNodeWidth; ++i) {
             if (!inside(refs[i], recordCount)) continue;
+            if constexpr (kFloats<Reader>) {
+                // A whole leaf of this geometry's primitives (nearly every leaf): refitted four lanes at a time.
+                const ConstTriangleLeaf leaf = triangleLeaf(src, leafFirst(refs[i]), leafCount(refs[i]));
+                bool whole = leaf.n >= 1 && leaf.n <= 4;
+                for (uint32_t l = 0; l < leaf.n && whole; ++l)
+                    whole = leaf.geometryIndex(l) == g && leaf.primitiveIndex()[l] < count;
+                if (whole) {
+                    PendingLeaf& p = leaves[leafN++];
+                    p.src = leaf, p.dst = triangleLeaf(dst, leafFirst(refs[i]), leafCount(refs[i])), p.slot = i;
+                    for (uint32_t l = 0; l < leaf.n; ++l)
+                        for (uint32_t c = 0; c < 3; ++c) {
+                            p.vertex[l][c] = reader.vertexPointer(leaf.primitiveIndex()[l], c);
+                            __builtin_prefetch(p.vertex[l][c], 0, 3);
+                        }
+                    continue;
+                }
+            }
             for (uint32_t l = 0; l < leafCount(refs[i]); ++l) {
                 const LaneRef at = lane(src, dst, refs[i], l);
                 if (at.geometry() != g) {
@@ -257,7 +275,106 @@ private:
                 }
             }
         }
-        finish<Reader::kVertex>(pending, n, boxes);
+        if (n) finish<Reader::kVertex>(pending, n, boxes);
+        if constexpr (kFloats<Reader>)
+            for (uint32_t k = 0; k < leafN; ++k) finishLeaf<Reader::kVertex>(leaves[k], boxes);
+    }
+
+    // The nine rows of a leaf of N lanes from transposed registers (rows[c][a]: coordinate a of vertex c).
+    template <uint32_t N>
+    static void storeRows(float* out, const __m128 (&rows)[3][4]) {
+        if constexpr (N == 4) {
+            for (uint32_t c = 0; c < 3; ++c)
+                for (uint32_t a = 0; a < 3; ++a) _mm_storeu_ps(out + 4 * (3 * c + a), rows[c][a]);
+        } else {
+            alignas(16) float r[9][4];
+            for (uint32_t c = 0; c < 3; ++c)
+                for (uint32_t a = 0; a < 3; ++a) _mm_store_ps(r[3 * c + a], rows[c][a]);
+            for (uint32_t k = 0; k < 9; ++k)
+                for (uint32_t l = 0; l < N; ++l) out[N * k + l] = r[k][l];
+        }
+    }
+
+    struct PendingLeaf {
+        const std::byte* vertex[4][3];
+        ConstTriangleLeaf src;
+        MutableTriangleLeaf dst;
+        uint32_t slot;
+    };
+
+    // A whole leaf of float vertices without a transform: the lanes' vertices transposed into the leaf's rows
+    // (missing lanes repeat lane 0, and are not stored), the degenerate test of four lanes in double (the same
+    // products and differences as isDegenerateTriangle, so the same decisions as the build), the box from the rows.
+    // A leaf with a NaN coordinate goes through the per-lane path, whose decode decides activity and quiets NaNs.
+    template <TriangleVertexKind V>
+    static void finishLeaf(const PendingLeaf& p, SimdBoxNanIgnored boxes[kNodeWidth]) {
+        const uint32_t n = p.src.n;
+        __m128 v[3][4];  // v[c][l]: vertex c of lane l, (x, y, z, 0)
+        for (uint32_t l = 0; l < 4; ++l)
+            for (uint32_t c = 0; c < 3; ++c) v[c][l] = loadFloatVertex<V>(p.vertex[l < n ? l : 0][c]);
+        __m128 nan = _mm_setzero_ps();
+        for (uint32_t c = 0; c < 3; ++c)
+            for (uint32_t l = 0; l < 4; ++l) nan = _mm_or_ps(nan, _mm_cmpunord_ps(v[c][l], v[c][l]));
+        if (_mm_movemask_ps(nan)) {
+            Pending lanes[4];
+            for (uint32_t l = 0; l < n; ++l) {
+                lanes[l].at = LaneRef{p.src, p.dst, l}, lanes[l].slot = p.slot;
+                for (uint32_t c = 0; c < 3; ++c) lanes[l].vertex[c] = p.vertex[l][c];
+            }
+            finish<V>(lanes, n, boxes);
+            return;
+        }
+        // rows[3 c + a]: coordinate a of vertex c, one lane each (after the transpose, row 3 of each is zero)
+        __m128 rows[3][4];
+        for (uint32_t c = 0; c < 3; ++c) {
+            rows[c][0] = v[c][0], rows[c][1] = v[c][1], rows[c][2] = v[c][2], rows[c][3] = v[c][3];
+            _MM_TRANSPOSE4_PS(rows[c][0], rows[c][1], rows[c][2], rows[c][3]);
+        }
+        // Degenerate: n = e1 x e2 == 0 in double, two lanes at a time.
+        int degenerate = 0;
+        for (uint32_t half = 0; half < 2; ++half) {
+            auto lanes = [&](__m128 r) { return _mm_cvtps_pd(half ? _mm_movehl_ps(r, r) : r); };
+            __m128d e1[3], e2[3];
+            for (uint32_t a = 0; a < 3; ++a) {
+                const __m128d a0 = lanes(rows[0][a]);
+                e1[a] = _mm_sub_pd(lanes(rows[1][a]), a0);
+                e2[a] = _mm_sub_pd(lanes(rows[2][a]), a0);
+            }
+            const __m128d n0 = _mm_sub_pd(_mm_mul_pd(e1[1], e2[2]), _mm_mul_pd(e1[2], e2[1]));
+            const __m128d n1 = _mm_sub_pd(_mm_mul_pd(e1[2], e2[0]), _mm_mul_pd(e1[0], e2[2]));
+            const __m128d n2 = _mm_sub_pd(_mm_mul_pd(e1[0], e2[1]), _mm_mul_pd(e1[1], e2[0]));
+            const __m128d zero = _mm_setzero_pd();
+            const __m128d all = _mm_and_pd(_mm_and_pd(_mm_cmpeq_pd(n0, zero), _mm_cmpeq_pd(n1, zero)), _mm_cmpeq_pd(n2, zero));
+            degenerate |= _mm_movemask_pd(all) << (2 * half);
+        }
+        // The rows, then the lane words (primitive indices are unchanged; geometry and flags re-packed).
+        float* out = p.dst.row(0);
+        switch (n) {
+            case 4: storeRows<4>(out, rows); break;
+            case 3: storeRows<3>(out, rows); break;
+            case 2: storeRows<2>(out, rows); break;
+            default: storeRows<1>(out, rows); break;
+        }
+        const bool inPlace = static_cast<const void*>(p.src.base) == static_cast<const void*>(p.dst.base);
+        for (uint32_t l = 0; l < n; ++l) {
+            if (!inPlace) p.dst.primitiveIndex()[l] = p.src.primitiveIndex()[l];
+            uint32_t flags = p.src.flags(l) & ~kTriangleDegenerate;
+            if (degenerate & (1 << l)) flags |= kTriangleDegenerate;
+            p.dst.geometryAndFlags()[l] = packGeometryAndFlags(p.src.geometryIndex(l), flags);
+        }
+        // The leaf's box: every lane is active (no NaN); missing lanes repeat lane 0. Reduced so that among equal
+        // values (zeros of either sign) the first in lane-then-vertex order wins, as in the per-lane path's
+        // extends: first(A, B) = min(B, A) returns A on a tie, and it is associative.
+        auto firstMin = [](__m128 a, __m128 b) { return _mm_min_ps(b, a); };
+        auto firstMax = [](__m128 a, __m128 b) { return _mm_max_ps(b, a); };
+        __m128 lo[4], up[4];
+        for (uint32_t l = 0; l < 4; ++l) {
+            lo[l] = firstMin(firstMin(v[0][l], v[1][l]), v[2][l]);
+            up[l] = firstMax(firstMax(v[0][l], v[1][l]), v[2][l]);
+        }
+        SimdBoxNanIgnored& box = boxes[p.slot];
+        box.lower = firstMin(box.lower, firstMin(firstMin(lo[0], lo[1]), firstMin(lo[2], lo[3])));
+        box.upper = firstMax(box.upper, firstMax(firstMax(up[0], up[1]), firstMax(up[2], up[3])));
     }
 
     // The second step of batch: float vertices without a transform, in SSE registers from load to leaf.
