@@ -1,6 +1,8 @@
 #include "model_loader.hpp"
 
+#include <assimp/DefaultLogger.hpp>
 #include <assimp/Importer.hpp>
+#include <assimp/LogStream.hpp>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 
@@ -22,6 +24,33 @@ namespace vkas_tool {
 namespace {
 
 namespace fs = std::filesystem;
+
+// Some importers repair what they find wrong and only log it (assimp's OFF reader clamps an out-of-range vertex
+// index to the last vertex): the first error assimp logs while reading a file fails the load.
+class ErrorCatcher : public Assimp::LogStream {
+public:
+    void write(const char* message) override {
+        if (first.empty() && message) {
+            first = message;
+            while (!first.empty() && (first.back() == '\n' || first.back() == '\r')) first.pop_back();
+            const size_t colon = first.find(": ");  // "Error, T0: OFF: ..." -> "OFF: ..."
+            if (first.rfind("Error", 0) == 0 && colon != std::string::npos) first = first.substr(colon + 2);
+        }
+    }
+    std::string first;
+};
+
+struct AssimpErrorLog {
+    AssimpErrorLog() {
+        Assimp::DefaultLogger::create("", Assimp::Logger::NORMAL, 0);  // no default streams: nothing printed
+        Assimp::DefaultLogger::get()->attachStream(&catcher, Assimp::Logger::Err);
+    }
+    ~AssimpErrorLog() {
+        Assimp::DefaultLogger::get()->detachStream(&catcher, Assimp::Logger::Err);
+        Assimp::DefaultLogger::kill();
+    }
+    ErrorCatcher catcher;
+};
 
 // The checks assimp would report vaguely ("No suitable reader found") or not at all, done first.
 uint64_t checkReadableFile(const std::string& path) {
@@ -108,6 +137,7 @@ ModelInfo loadModel(const std::string& path, Scene& scene) {
     Assimp::Importer importer;
     importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
     const aiScene* s = nullptr;
+    AssimpErrorLog errors;
     try {
         s = importer.ReadFile(path, aiProcess_Triangulate | aiProcess_JoinIdenticalVertices | aiProcess_SortByPType);
     } catch (const std::bad_alloc&) {
@@ -120,6 +150,7 @@ ModelInfo loadModel(const std::string& path, Scene& scene) {
             throw InputError(path, "holds no triangles (only points or lines)");
         throw InputError(path, "not a mesh file assimp can read: " + (why.empty() ? std::string("unknown error") : why));
     }
+    if (!errors.catcher.first.empty()) throw InputError(path, "malformed: " + errors.catcher.first);
     if (!s->mRootNode || s->mNumMeshes == 0) throw InputError(path, "holds no meshes");
 
     ModelInfo info;
