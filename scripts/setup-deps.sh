@@ -4,8 +4,10 @@
 set -euo pipefail
 
 # clang + libclang-rt-14-dev (libFuzzer, the sanitizer runtimes): the sanitizer build and its fuzz targets.
+# libassimp-dev: the vkas tool reads mesh files; glmark2-data, assimp-testmodels (OBJ, 3DS, OFF, PLY, STL, glTF) and
+# python3: the tool's CLI tests (tests/cli/).
 packages=(build-essential cmake pkg-config libvulkan-dev libxxhash-dev libgtest-dev libgmock-dev libcli11-dev libpng-dev
-          glslang-tools clang libclang-rt-14-dev "$@")
+          glslang-tools clang libclang-rt-14-dev python3 libassimp-dev glmark2-data assimp-testmodels "$@")
 
 missing=()
 for p in "${packages[@]}"; do

@@ -315,6 +315,7 @@ void createAndBuild(VkContext& ctx, StructureSet& set, VkAccelerationStructureTy
         VkAccelerationStructureKHR handle = VK_NULL_HANDLE;
         check(ctx.vkCreateAccelerationStructureKHR(dev, &aci, nullptr, &handle), "vkCreateAccelerationStructureKHR");
         set.handles.push_back(handle);
+        set.offsets.push_back(storageOffsets[i]);
         infos[i].dstAccelerationStructure = handle;
         infos[i].scratchData.hostAddress = scratch.data() + scratchOffsets[i];
         rangePointers.push_back(ranges[i].data());

@@ -51,6 +51,7 @@ public:
     StructureSet& operator=(const StructureSet&) = delete;
 
     std::vector<VkAccelerationStructureKHR> handles;
+    std::vector<VkDeviceSize> offsets;  // where each structure's block starts in `storage`
     std::vector<StructureStats> stats;
     std::unique_ptr<HostBuffer> storage;
     VkDeviceSize scratchBytes = 0;  // scratch buffer used by the build
@@ -58,6 +59,8 @@ public:
     double sizeQueryMs = 0;
     double buildMs = 0;             // the vkBuildAccelerationStructuresKHR call alone
 
+    // The bytes of structure i (docs/FORMAT.md), at the start of its range of the storage buffer.
+    const unsigned char* block(size_t i) const { return storage->data() + offsets.at(i); }
     uint64_t totalPrimitives() const;
     VkDeviceSize totalSize() const;
 

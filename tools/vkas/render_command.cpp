@@ -1,11 +1,16 @@
 #include "render_command.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
 #include <thread>
 
 #include "as_builder.hpp"
+#include "build_preference.hpp"
+#include "heatmap_command.hpp"
+#include "input_error.hpp"
+#include "progress.hpp"
 #include "png_writer.hpp"
 #include "renderer.hpp"
 #include "scene.hpp"
@@ -21,6 +26,24 @@ double rate(double count, double ms) { return ms > 0 ? count / (ms * 1000.0) : 0
 }  // namespace
 
 int runRender(const RenderCommandOptions& options) {
+    if (options.heatmap) {
+        HeatmapOptions h;
+        h.files = options.files;
+        h.output = options.output == "vkas-render.png" ? "vkas-heatmap.png" : options.output;
+        h.metric = options.metric;
+        h.width = options.width, h.height = options.height;
+        h.view = options.view;
+        h.preference = options.preference;
+        h.threads = options.threads;
+        h.validation = options.validation;
+        return runHeatmap(h);
+    }
+    const VkBuildAccelerationStructureFlagsKHR flags = preferenceFlags(options.preference);
+    // Rays, hits and surfaces of one chunk, and the image: refuse sizes that cannot fit before allocating them.
+    const double pixels = double(options.width) * options.height;
+    checkMemory(pixels * (sizeof(VkasRay) + sizeof(VkasHit) + 3) +
+                    std::min(pixels, double(1u << 20)) * (options.aoSamples + 1) * (sizeof(VkasRay) + sizeof(VkasHit)),
+                "an image of " + std::to_string(options.width) + "x" + std::to_string(options.height));
     DeviceOptions deviceOptions;
     deviceOptions.validation = options.validation;
     deviceOptions.workerThreads = options.threads;
@@ -28,16 +51,33 @@ int runRender(const RenderCommandOptions& options) {
     uint32_t threads = options.threads ? options.threads : std::max(1u, std::thread::hardware_concurrency());
 
     auto t0 = std::chrono::steady_clock::now();
-    SceneOptions sceneOptions;
-    sceneOptions.instanceCount = options.instances;
-    sceneOptions.seed = options.seed;
-    Scene scene = makeBuiltinScene(sceneOptions);
+    Scene scene;
+    if (options.files.empty()) {
+        SceneOptions sceneOptions;
+        sceneOptions.instanceCount = options.instances;
+        sceneOptions.seed = options.seed;
+        scene = makeBuiltinScene(sceneOptions);
+    } else {
+        FileScene fs = loadFileScene(options.files, options.view, float(options.width) / float(options.height));
+        scene = std::move(fs.scene);
+        Progress::clear();
+        for (const ModelInfo& m : fs.models)
+            std::printf("loaded %s: %u meshes, %u instances, %llu triangles, %llu vertices\n", m.path.c_str(), m.meshes,
+                        m.instances, static_cast<unsigned long long>(m.triangles),
+                        static_cast<unsigned long long>(m.vertices));
+        std::printf("bounds (%g, %g, %g) .. (%g, %g, %g); camera at (%g, %g, %g)\n", fs.bounds.lo.x, fs.bounds.lo.y,
+                    fs.bounds.lo.z, fs.bounds.hi.x, fs.bounds.hi.y, fs.bounds.hi.z, scene.camera.position.x,
+                    scene.camera.position.y, scene.camera.position.z);
+    }
     double sceneMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-    std::printf("vkas render: built-in scene, %ux%u, %u AO rays per pixel, %u trace threads, validation %s\n",
-                options.width, options.height, options.aoSamples, threads, options.validation ? "on" : "off");
-    std::printf("scene: %zu meshes generated in %.1f ms\n", scene.meshes.size(), sceneMs);
+    std::printf("vkas render: %s, %ux%u, %u AO rays per pixel, %u trace threads, %s build, validation %s\n",
+                options.files.empty() ? "built-in scene" : "files", options.width, options.height, options.aoSamples,
+                threads, options.preference.c_str(), options.validation ? "on" : "off");
+    std::printf("scene: %zu meshes %s in %.1f ms\n", scene.meshes.size(), options.files.empty() ? "generated" : "loaded",
+                sceneMs);
 
-    auto blas = buildBottomLevel(ctx, scene.blases, defaultBuildFlags());
+    Progress::note("building");
+    auto blas = buildBottomLevel(ctx, scene.blases, flags);
     std::printf("\nbottom level: %zu structures built in one vkBuildAccelerationStructuresKHR call\n",
                 blas->handles.size());
     std::printf("  %-12s %-16s %10s %10s %12s %10s %14s\n", "structure", "primitives", "geometries", "count",
@@ -61,7 +101,8 @@ int runRender(const RenderCommandOptions& options) {
                 blas->buildMs, rate(static_cast<double>(tris), blas->buildMs), blas->sizeQueryMs,
                 mib(static_cast<double>(blas->inputBytes)));
 
-    auto tlas = buildTopLevel(ctx, scene.instances, blas->handles, defaultBuildFlags());
+    auto tlas = buildTopLevel(ctx, scene.instances, blas->handles, flags);
+    Progress::clear();
     const StructureStats& ts = tlas->stats[0];
     std::printf("\ntop level: %llu instances, %llu bytes (%.1f bytes/instance), scratch %llu bytes\n",
                 static_cast<unsigned long long>(ts.primitives), static_cast<unsigned long long>(ts.size),
@@ -77,7 +118,12 @@ int runRender(const RenderCommandOptions& options) {
     renderOptions.height = options.height;
     renderOptions.aoSamples = options.aoSamples;
     RenderStats stats;
-    Image image = render(ctx, scene, tlas->handles[0], renderOptions, stats);
+    Image image;
+    {
+        Progress progress("tracing", static_cast<uint64_t>(pixels));
+        renderOptions.progress = [&](uint64_t done, uint64_t) { progress.update(done); };
+        image = render(ctx, scene, tlas->handles[0], renderOptions, stats);
+    }
     std::printf("\ntrace (vkasTraceRaysProcedural: crates intersected by the renderer, %u threads)\n", threads);
     std::printf("  primary    %10llu rays %9.1f ms %8.2f Mrays/s  (closest hit, %.1f%% hit)\n",
                 static_cast<unsigned long long>(stats.primaryRays), stats.primaryMs,

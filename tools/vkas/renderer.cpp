@@ -1,5 +1,7 @@
 #include "renderer.hpp"
 
+#include "camera_rays.hpp"
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -154,24 +156,7 @@ Image render(VkContext& ctx, const Scene& scene, VkAccelerationStructureKHR topL
     const size_t pixels = static_cast<size_t>(W) * H;
 
     // Primary rays, one per pixel through its centre.
-    const Camera& cam = scene.camera;
-    Vec3 forward = normalize(cam.target - cam.position);
-    Vec3 right = normalize(cross(forward, cam.up));
-    Vec3 up = cross(right, forward);
-    float tanHalf = std::tan(cam.verticalFovDegrees * std::numbers::pi_v<float> / 360.0f);
-    float aspect = static_cast<float>(W) / static_cast<float>(H);
-    std::vector<VkasRay> primary(pixels);
-    for (uint32_t y = 0; y < H; ++y) {
-        for (uint32_t x = 0; x < W; ++x) {
-            float sx = (2.0f * (x + 0.5f) / W - 1.0f) * tanHalf * aspect;
-            float sy = (1.0f - 2.0f * (y + 0.5f) / H) * tanHalf;
-            VkasRay& r = primary[static_cast<size_t>(y) * W + x];
-            toArray(cam.position, r.origin);
-            toArray(normalize(forward + right * sx + up * sy), r.direction);
-            r.tMin = 0.0f;
-            r.tMax = 1.0e4f;
-        }
-    }
+    const std::vector<VkasRay> primary = primaryRays(scene.camera, W, H, scene.rayTMax);
     std::vector<VkasHit> primaryHits;
     trace(ctx, scene, topLevel, VKAS_TRACE_MODE_CLOSEST_HIT, primary, primaryHits, stats.primaryMs);
     stats.primaryRays = pixels;
@@ -209,7 +194,7 @@ Image render(VkContext& ctx, const Scene& scene, VkAccelerationStructureKHR topL
             if (dot(s.geometricNormal, sun) > 0 && dot(s.shadingNormal, sun) > 0) {
                 shadowRay[p - begin] = static_cast<int32_t>(rays.size());
                 toArray(sun, r.direction);
-                r.tMax = 1.0e4f;
+                r.tMax = scene.rayTMax;
                 rays.push_back(r);
             }
             Rng rng(p, 3);
@@ -251,13 +236,14 @@ Image render(VkContext& ctx, const Scene& scene, VkAccelerationStructureKHR topL
                 Vec3 direct = sunColour * (1.2f * sunVisible * std::max(0.0f, dot(s.shadingNormal, sun)));
                 colour = mul(s.albedo, ambient + direct);
                 // A little aerial perspective.
-                float fog = 1.0f - std::exp(-hit.t * 0.004f);
+                float fog = 1.0f - std::exp(-hit.t * scene.fogDensity);
                 colour = colour * (1.0f - fog) + Vec3{0.78f, 0.85f, 0.93f} * fog;
             }
             image.rgb[3 * p + 0] = toSrgb8(colour.x);
             image.rgb[3 * p + 1] = toSrgb8(colour.y);
             image.rgb[3 * p + 2] = toSrgb8(colour.z);
         }
+        if (options.progress) options.progress(end, pixels);
     }
     stats.totalMs = millisecondsSince(start);
     return image;

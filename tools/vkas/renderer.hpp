@@ -5,6 +5,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 #include "scene.hpp"
@@ -16,6 +17,7 @@ struct RenderOptions {
     uint32_t width = 800;
     uint32_t height = 600;
     uint32_t aoSamples = 8;  // ambient-occlusion rays per pixel
+    std::function<void(uint64_t done, uint64_t total)> progress;  // pixels shaded so far (may be empty)
 };
 
 struct RenderStats {

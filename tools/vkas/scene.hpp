@@ -91,6 +91,8 @@ struct Scene {
     Camera camera;
     Vec3 sunDirection;  // unit vector towards the sun
     float aoRadius = 2.0f;
+    float fogDensity = 0.004f;  // aerial perspective per unit of distance
+    float rayTMax = 1.0e4f;     // camera and sun rays end here: past the scene
 
     uint64_t uniqueTriangles() const;     // triangles in all bottom-level structures
     uint64_t instancedTriangles() const;  // triangles seen through all instances

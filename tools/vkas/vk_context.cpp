@@ -23,6 +23,10 @@ VKAPI_ATTR VkBool32 VKAPI_CALL VkContext::messenger(VkDebugUtilsMessageSeverityF
                                                                                       : "info";
     if (severity & (VK_DEBUG_UTILS_MESSAGE_SEVERITY_ERROR_BIT_EXT | VK_DEBUG_UTILS_MESSAGE_SEVERITY_WARNING_BIT_EXT))
         ++self->validationMessages_;
+    if (self->collectMessages_) {
+        self->lastMessage_ = data && data->pMessage ? data->pMessage : "(no message)";
+        return VK_FALSE;
+    }
     // vkas's pMessage already names the VUID and the command ("Validation Error: [ VUID-... ] | vkCmd(): ...").
     std::fprintf(stderr, "vkas (%s): %s\n", level, data && data->pMessage ? data->pMessage : "(no message)");
     return VK_FALSE;
@@ -34,7 +38,7 @@ void VkContext::load(Pfn& pfn, const char* name) {
     if (!pfn) throw VkError(std::string("vkasGetDeviceProcAddr(\"") + name + "\")", VK_ERROR_FEATURE_NOT_PRESENT);
 }
 
-VkContext::VkContext(const DeviceOptions& options) {
+VkContext::VkContext(const DeviceOptions& options) : collectMessages_(options.collectMessages) {
     VkasDeviceCreateInfo info{};
     info.disableValidation = options.validation ? VK_FALSE : VK_TRUE;
     info.pfnMessenger = &VkContext::messenger;
@@ -56,6 +60,11 @@ VkContext::VkContext(const DeviceOptions& options) {
         load(vkDestroyAccelerationStructureKHR, "vkDestroyAccelerationStructureKHR");
         load(vkGetAccelerationStructureDeviceAddressKHR, "vkGetAccelerationStructureDeviceAddressKHR");
         load(vkBuildAccelerationStructuresKHR, "vkBuildAccelerationStructuresKHR");
+        load(vkWriteAccelerationStructuresPropertiesKHR, "vkWriteAccelerationStructuresPropertiesKHR");
+        load(vkCopyAccelerationStructureKHR, "vkCopyAccelerationStructureKHR");
+        load(vkCopyAccelerationStructureToMemoryKHR, "vkCopyAccelerationStructureToMemoryKHR");
+        load(vkCopyMemoryToAccelerationStructureKHR, "vkCopyMemoryToAccelerationStructureKHR");
+        load(vkGetDeviceAccelerationStructureCompatibilityKHR, "vkGetDeviceAccelerationStructureCompatibilityKHR");
     } catch (...) {
         vkasDestroyDevice(device_);
         throw;

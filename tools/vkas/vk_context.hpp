@@ -24,6 +24,8 @@ void check(VkResult result, const char* what);
 struct DeviceOptions {
     bool validation = true;       // vkas checks every command's valid usage (the default)
     uint32_t workerThreads = 0;   // threads for vkasTraceRays; 0 = all cores
+    bool collectMessages = false; // keep validation messages (lastMessage()) instead of printing them: a command that
+                                  // reports a bad file in one message of its own
 };
 
 // Owns a vkas device and its command table. Not copyable.
@@ -37,6 +39,8 @@ public:
     VkDevice device() const { return device_; }
     // Validation messages reported through the messenger so far.
     uint32_t validationMessages() const { return validationMessages_; }
+    // The last message when DeviceOptions::collectMessages is set ("" when none).
+    const std::string& lastMessage() const { return lastMessage_; }
 
     PFN_vkCreateBuffer vkCreateBuffer = nullptr;
     PFN_vkDestroyBuffer vkDestroyBuffer = nullptr;
@@ -52,6 +56,11 @@ public:
     PFN_vkDestroyAccelerationStructureKHR vkDestroyAccelerationStructureKHR = nullptr;
     PFN_vkGetAccelerationStructureDeviceAddressKHR vkGetAccelerationStructureDeviceAddressKHR = nullptr;
     PFN_vkBuildAccelerationStructuresKHR vkBuildAccelerationStructuresKHR = nullptr;
+    PFN_vkWriteAccelerationStructuresPropertiesKHR vkWriteAccelerationStructuresPropertiesKHR = nullptr;
+    PFN_vkCopyAccelerationStructureKHR vkCopyAccelerationStructureKHR = nullptr;
+    PFN_vkCopyAccelerationStructureToMemoryKHR vkCopyAccelerationStructureToMemoryKHR = nullptr;
+    PFN_vkCopyMemoryToAccelerationStructureKHR vkCopyMemoryToAccelerationStructureKHR = nullptr;
+    PFN_vkGetDeviceAccelerationStructureCompatibilityKHR vkGetDeviceAccelerationStructureCompatibilityKHR = nullptr;
 
 private:
     static VKAPI_ATTR VkBool32 VKAPI_CALL messenger(VkDebugUtilsMessageSeverityFlagBitsEXT severity,
@@ -63,6 +72,8 @@ private:
 
     VkDevice device_ = VK_NULL_HANDLE;
     uint32_t validationMessages_ = 0;
+    bool collectMessages_ = false;
+    std::string lastMessage_;
 };
 
 }  // namespace vkas_tool

@@ -1,0 +1,68 @@
+#include "mesh_header_check.hpp"
+
+#include <algorithm>
+#include <fstream>
+#include <sstream>
+
+#include "input_error.hpp"
+
+namespace vkas_tool {
+namespace {
+
+void refuse(const std::string& path, uint64_t vertices, uint64_t faces, uint64_t fileSize) {
+    throw InputError(path, "truncated or malformed: its header announces " + std::to_string(vertices) +
+                               " vertices and " + std::to_string(faces) + " faces, more than its " +
+                               std::to_string(fileSize) + " bytes can hold");
+}
+
+}  // namespace
+
+void checkDeclaredCounts(const std::string& path, uint64_t fileSize) {
+    std::ifstream in(path, std::ios::binary);
+    std::string first;
+    if (!(in >> first)) return;
+    // OFF: "[ST][C][N][4][n]OFF", then "vertices faces edges" (comments with '#' may come between).
+    if (first.size() >= 3 && first.compare(first.size() - 3, 3, "OFF") == 0) {
+        std::string line;
+        std::getline(in, line);
+        std::istringstream rest(line);
+        uint64_t v = 0, f = 0;
+        if (!(rest >> v >> f)) {
+            while (std::getline(in, line)) {
+                if (line.empty() || line[0] == '#') continue;
+                std::istringstream counts(line);
+                if (!(counts >> v >> f)) return;  // assimp reports it
+                break;
+            }
+        }
+        // A vertex takes at least "0 0 0\n" (6 bytes), a face "3 0 1 2\n" (8); binary OFF at least 12 and 16.
+        if (6 * v + 8 * f > fileSize) refuse(path, v, f, fileSize);
+        return;
+    }
+    // PLY: "element vertex N" / "element face M" lines up to "end_header"; at least 1 byte per property in binary,
+    // 2 in ASCII, and a face at least a count and three indices.
+    if (first == "ply") {
+        std::string line, format;
+        uint64_t v = 0, f = 0, vertexProps = 0;
+        bool inVertex = false;
+        while (std::getline(in, line) && line.rfind("end_header", 0) != 0) {
+            std::istringstream words(line);
+            std::string w, what;
+            words >> w;
+            if (w == "format") words >> format;
+            else if (w == "element") {
+                uint64_t n = 0;
+                words >> what >> n;
+                inVertex = what == "vertex";
+                if (inVertex) v = n;
+                else if (what == "face") f = n;
+            } else if (w == "property" && inVertex) {
+                ++vertexProps;
+            }
+        }
+        const uint64_t perProp = format == "ascii" ? 2 : 1;
+        if (v * std::max<uint64_t>(vertexProps, 3) * perProp + f * 4 * perProp > fileSize) refuse(path, v, f, fileSize);
+    }
+}
+
+}  // namespace vkas_tool
