@@ -1,7 +1,8 @@
 // How a bottom-level build scales over the threads joined to a deferred operation (VK_KHR_deferred_host_operations):
 // one build of a bumpy sphere (4 N^2 triangles) without deferral, then deferred and joined by 1, 2, 4, 8, ... threads.
 // Prints the time, the speed-up over the build without deferral, and whether the bytes are identical (they must be).
-// Usage: vkas_bench_deferred_build [N] [max threads]   (default 500: 1,000,000 triangles; hardware threads)
+// Usage: vkas_bench_deferred_build [N] [max threads] [build flags]   (default 500: 1,000,000 triangles; hardware
+// threads; PREFER_FAST_TRACE = 1, e.g. 8 for PREFER_FAST_BUILD, 0 for the default)
 #include <vkas/vkas.h>
 
 #include <chrono>
@@ -36,6 +37,8 @@ double msSince(std::chrono::steady_clock::time_point t0) {
 int main(int argc, char** argv) {
     const int n = argc > 1 ? std::atoi(argv[1]) : 500;
     const unsigned maxThreads = argc > 2 ? unsigned(std::atoi(argv[2])) : std::thread::hardware_concurrency();
+    const auto buildFlags = argc > 3 ? VkBuildAccelerationStructureFlagsKHR(std::atoi(argv[3]))
+                                     : VkBuildAccelerationStructureFlagsKHR(VK_BUILD_ACCELERATION_STRUCTURE_PREFER_FAST_TRACE_BIT_KHR);
     VkDevice dev;
     if (vkasCreateDevice(nullptr, &dev) != VK_SUCCESS) return 1;
     Commands vk;
@@ -71,7 +74,7 @@ int main(int argc, char** argv) {
     t.indexData.hostAddress = idx.data();
     VkAccelerationStructureBuildGeometryInfoKHR info{VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_BUILD_GEOMETRY_INFO_KHR};
     info.type = VK_ACCELERATION_STRUCTURE_TYPE_BOTTOM_LEVEL_KHR;
-    info.flags = VK_BUILD_ACCELERATION_STRUCTURE_PREFER_FAST_TRACE_BIT_KHR;
+    info.flags = buildFlags;
     info.geometryCount = 1;
     info.pGeometries = &g;
     uint32_t count = uint32_t(idx.size() / 3);

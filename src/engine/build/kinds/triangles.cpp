@@ -23,6 +23,32 @@ using namespace format;
 
 namespace {
 
+// One float vertex in lanes 0-2 (z = 0 for two components), lane 3 zero. Reads exactly the vertex's bytes.
+template <TriangleVertexKind V>
+inline __m128 loadFloatVertex(const std::byte* p) {
+    uint64_t xy;
+    std::memcpy(&xy, p, 8);
+    const __m128 lo = _mm_castsi128_ps(_mm_cvtsi64_si128(int64_t(xy)));
+    if constexpr (V == TriangleVertexKind::Float3) return _mm_movelh_ps(lo, _mm_set_ss(loadUnaligned<float>(p + 8)));
+    return lo;
+}
+
+// isDegenerateTriangle on vertices in registers: the same double differences and products, two lanes at a time
+// (the middle component comes out negated, which keeps whether it is zero), so the decision is the build's.
+inline bool isDegenerateTriangleSse(__m128 v0, __m128 v1, __m128 v2) {
+    const __m128d a = _mm_cvtps_pd(v0), az = _mm_cvtps_pd(_mm_movehl_ps(v0, v0));
+    const __m128d e1 = _mm_sub_pd(_mm_cvtps_pd(v1), a), e1z = _mm_sub_pd(_mm_cvtps_pd(_mm_movehl_ps(v1, v1)), az);
+    const __m128d e2 = _mm_sub_pd(_mm_cvtps_pd(v2), a), e2z = _mm_sub_pd(_mm_cvtps_pd(_mm_movehl_ps(v2, v2)), az);
+    const __m128d e2s = _mm_shuffle_pd(e2, e2, 1);  // (e2y, e2x)
+    const __m128d t = _mm_mul_pd(e1, e2s);           // (e1x e2y, e1y e2x)
+    const __m128d n2 = _mm_sub_sd(t, _mm_unpackhi_pd(t, t));
+    // (e1y e2z - e1z e2y, e1x e2z - e1z e2x) = (n0, -n1)
+    const __m128d n01 = _mm_sub_pd(_mm_mul_pd(_mm_shuffle_pd(e1, e1, 1), _mm_unpacklo_pd(e2z, e2z)),
+                                   _mm_mul_pd(_mm_unpacklo_pd(e1z, e1z), e2s));
+    const __m128d zero = _mm_setzero_pd();
+    return _mm_movemask_pd(_mm_cmpeq_pd(n01, zero)) == 3 && (_mm_movemask_pd(_mm_cmpeq_sd(n2, zero)) & 1);
+}
+
 // Fetches the active triangles of every triangle geometry into temp[] and refs[]; returns how many.
 // Triangle number k of the build (geometries in order) is fetched into temp[k] by chunks, on several threads when
 // the job has a ParallelFor; then the refs of the kept triangles are packed in order. refs[j].index names the
@@ -54,7 +80,45 @@ uint32_t gatherTriangles(const BuildJob& job, PrimRef* refs, std::byte* tempByte
             recordFlags(geom.flags) | (opacityMicromapOf(geom.geometry.triangles) ? kTriangleMicromap : 0);
         // The reader specialised for the geometry's index type, vertex format and transform (no per-vertex dispatch).
         source.visit([&](auto reader) {
-            for (uint32_t i = ch.begin; i < ch.end; ++i) {
+            using Reader = decltype(reader);
+            uint32_t i = ch.begin;
+            if constexpr (Reader::kVertex != TriangleVertexKind::Other && !Reader::kTransform) {
+                // Float vertices without a transform, in SSE registers from load to record: the same values and
+                // decisions as the general loop below (which takes over at the first NaN, whose quieting and
+                // activity rules it applies); the box as Aabb::extend makes it (the first of equal values wins).
+                for (; i < ch.end; ++i) {
+                    const __m128 v0 = loadFloatVertex<Reader::kVertex>(reader.vertexPointer(i, 0));
+                    const __m128 v1 = loadFloatVertex<Reader::kVertex>(reader.vertexPointer(i, 1));
+                    const __m128 v2 = loadFloatVertex<Reader::kVertex>(reader.vertexPointer(i, 2));
+                    const __m128 nan = _mm_or_ps(_mm_or_ps(_mm_cmpunord_ps(v0, v0), _mm_cmpunord_ps(v1, v1)),
+                                                 _mm_cmpunord_ps(v2, v2));
+                    if (_mm_movemask_ps(nan)) break;
+                    const uint64_t k = ch.base + i;
+                    uint32_t recFlags = flags;
+                    if (isDegenerateTriangleSse(v0, v1, v2)) {
+                        if (!keepDegenerate) {
+                            refs[k].pad = 0;  // not kept
+                            continue;
+                        }
+                        recFlags |= kTriangleDegenerate;
+                    }
+                    TriangleRecord& rec = temp[k];
+                    // Overlapping stores: each vertex's zero lane 3 is overwritten by the next store.
+                    _mm_storeu_ps(rec.v[0], v0);
+                    _mm_storeu_ps(rec.v[1], v1);
+                    _mm_storeu_ps(rec.v[2], v2);
+                    rec.geometryIndex = ch.geometry;
+                    rec.primitiveIndex = i;
+                    rec.flags = recFlags;
+                    const __m128 lower = _mm_min_ps(v2, _mm_min_ps(v1, v0));
+                    const __m128 upper = _mm_max_ps(v2, _mm_max_ps(v1, v0));
+                    const __m128 indexLane = _mm_castsi128_ps(_mm_set_epi32(int(uint32_t(k)), 0, 0, 0));
+                    const __m128 keptLane = _mm_castsi128_ps(_mm_set_epi32(1, 0, 0, 0));
+                    _mm_storeu_ps(refs[k].lower, _mm_or_ps(xyz(lower), indexLane));  // lower, index
+                    _mm_storeu_ps(refs[k].upper, _mm_or_ps(xyz(upper), keptLane));   // upper, kept
+                }
+            }
+            for (; i < ch.end; ++i) {
                 const uint64_t k = ch.base + i;
                 TriangleRecord& rec = temp[k];
                 refs[k].pad = 0;  // not kept
@@ -121,32 +185,6 @@ private:
     std::optional<TriangleSource> source_;
     uint32_t current_ = UINT32_MAX;
 };
-
-// One float vertex in lanes 0-2 (z = 0 for two components), lane 3 zero. Reads exactly the vertex's bytes.
-template <TriangleVertexKind V>
-inline __m128 loadFloatVertex(const std::byte* p) {
-    uint64_t xy;
-    std::memcpy(&xy, p, 8);
-    const __m128 lo = _mm_castsi128_ps(_mm_cvtsi64_si128(int64_t(xy)));
-    if constexpr (V == TriangleVertexKind::Float3) return _mm_movelh_ps(lo, _mm_set_ss(loadUnaligned<float>(p + 8)));
-    return lo;
-}
-
-// isDegenerateTriangle on vertices in registers: the same double differences and products, two lanes at a time
-// (the middle component comes out negated, which keeps whether it is zero), so the decision is the build's.
-inline bool isDegenerateTriangleSse(__m128 v0, __m128 v1, __m128 v2) {
-    const __m128d a = _mm_cvtps_pd(v0), az = _mm_cvtps_pd(_mm_movehl_ps(v0, v0));
-    const __m128d e1 = _mm_sub_pd(_mm_cvtps_pd(v1), a), e1z = _mm_sub_pd(_mm_cvtps_pd(_mm_movehl_ps(v1, v1)), az);
-    const __m128d e2 = _mm_sub_pd(_mm_cvtps_pd(v2), a), e2z = _mm_sub_pd(_mm_cvtps_pd(_mm_movehl_ps(v2, v2)), az);
-    const __m128d e2s = _mm_shuffle_pd(e2, e2, 1);  // (e2y, e2x)
-    const __m128d t = _mm_mul_pd(e1, e2s);           // (e1x e2y, e1y e2x)
-    const __m128d n2 = _mm_sub_sd(t, _mm_unpackhi_pd(t, t));
-    // (e1y e2z - e1z e2y, e1x e2z - e1z e2x) = (n0, -n1)
-    const __m128d n01 = _mm_sub_pd(_mm_mul_pd(_mm_shuffle_pd(e1, e1, 1), _mm_unpacklo_pd(e2z, e2z)),
-                                   _mm_mul_pd(_mm_unpacklo_pd(e1z, e1z), e2s));
-    const __m128d zero = _mm_setzero_pd();
-    return _mm_movemask_pd(_mm_cmpeq_pd(n01, zero)) == 3 && (_mm_movemask_pd(_mm_cmpeq_sd(n2, zero)) & 1);
-}
 
 // One triangle of a leaf: the leaf in the source and destination (they may be the same bytes) and its lane.
 struct LaneRef {
