@@ -85,19 +85,33 @@ inline SimdBoxNanIgnored nodeBox(const Node& n) {
     return b;
 }
 
+// Into another structure: the parts a refit does not change (header, geometry table, the zeroed gaps, and what
+// follows the records: the zero tail of triangle leaves, layout.hpp).
+inline void copyUnchangedParts(const RefitJob& job, const format::Header& h) {
+    if (job.src == job.dst) return;
+    const uint64_t nodeEnd = h.nodeOffset + uint64_t(h.nodeCount) * sizeof(Node);
+    std::memcpy(job.dst, job.src, h.nodeOffset);
+    std::memcpy(job.dst + nodeEnd, job.src + nodeEnd, h.recordOffset - nodeEnd);
+    const uint64_t recordEnd = h.recordOffset + uint64_t(h.recordCount) * recordSize(h.type, h.primitiveType, h.buildFlags);
+    if (h.usedSize > recordEnd) std::memcpy(job.dst + recordEnd, job.src + recordEnd, h.usedSize - recordEnd);
+}
+
+// The header's bounds from the root's new box, and the header written.
+inline void finishHeader(const RefitJob& job, format::Header& h, const SimdBoxNanIgnored& bounds) {
+    alignas(16) float lo[4], up[4];
+    _mm_store_ps(lo, bounds.lower);
+    _mm_store_ps(up, bounds.upper);
+    h.bounds[0] = lo[0], h.bounds[1] = lo[1], h.bounds[2] = lo[2];
+    h.bounds[3] = up[0], h.bounds[4] = up[1], h.bounds[5] = up[2];
+    std::memcpy(job.dst, &h, sizeof h);
+}
+
 // The refit proper. Reads every node and record of src once and writes the same byte ranges of dst.
 template <class Refitter>
 void refitTree(const RefitJob& job, Refitter& refit) {
     format::Header h;
     std::memcpy(&h, job.src, sizeof h);
-    const uint64_t nodeEnd = h.nodeOffset + uint64_t(h.nodeCount) * sizeof(Node);
-    if (job.src != job.dst) {  // the parts a refit does not change: header, geometry table, the zeroed gaps
-        std::memcpy(job.dst, job.src, h.nodeOffset);
-        std::memcpy(job.dst + nodeEnd, job.src + nodeEnd, h.recordOffset - nodeEnd);
-        // and what follows the records (the zero tail of triangle leaves, layout.hpp)
-        const uint64_t recordEnd = h.recordOffset + uint64_t(h.recordCount) * recordSize(h.type, h.primitiveType, h.buildFlags);
-        if (h.usedSize > recordEnd) std::memcpy(job.dst + recordEnd, job.src + recordEnd, h.usedSize - recordEnd);
-    }
+    copyUnchangedParts(job, h);
     const auto* srcNodes = reinterpret_cast<const Node*>(job.src + h.nodeOffset);
     auto* dstNodes = reinterpret_cast<Node*>(job.dst + h.nodeOffset);
     const std::byte* srcRecords = job.src + h.recordOffset;
@@ -128,12 +142,7 @@ void refitTree(const RefitJob& job, Refitter& refit) {
     } else if (format::isInternal(h.root) && format::nodeIndex(h.root) < h.nodeCount) {
         bounds = nodeBox(dstNodes[nodeIndex(h.root)]);
     }
-    alignas(16) float lo[4], up[4];
-    _mm_store_ps(lo, bounds.lower);
-    _mm_store_ps(up, bounds.upper);
-    h.bounds[0] = lo[0], h.bounds[1] = lo[1], h.bounds[2] = lo[2];
-    h.bounds[3] = up[0], h.bounds[4] = up[1], h.bounds[5] = up[2];
-    std::memcpy(job.dst, &h, sizeof h);
+    finishHeader(job, h, bounds);
 }
 
 template <class Refitter>

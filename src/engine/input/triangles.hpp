@@ -59,6 +59,13 @@ public:
         else if constexpr (I == TriangleIndexKind::U32) return loadUnaligned<uint32_t>(indices_ + 4 * k);
         else return k;
     }
+    // Where triangle i's three indices are (null without an index buffer): for prefetching.
+    template <TriangleIndexKind I>
+    const std::byte* indexPointer(uint32_t i) const {
+        if constexpr (I == TriangleIndexKind::U16) return indices_ + 6ull * i;
+        else if constexpr (I == TriangleIndexKind::U32) return indices_ + 12ull * i;
+        else return nullptr;
+    }
     // The first byte of corner j of triangle i.
     template <TriangleIndexKind I>
     const std::byte* vertexPointer(uint32_t i, uint32_t j) const {
@@ -93,6 +100,7 @@ struct TriangleReader {
     uint32_t primitiveCount() const { return source->primitiveCount(); }
     bool fetch(uint32_t i, float v[3][3]) const { return source->fetchAs<I, V, T>(i, v); }
     const std::byte* vertexPointer(uint32_t i, uint32_t j) const { return source->vertexPointer<I>(i, j); }
+    const std::byte* indexPointer(uint32_t i) const { return source->indexPointer<I>(i); }
 };
 
 template <TriangleIndexKind I, TriangleVertexKind V, bool T>

@@ -238,7 +238,7 @@ public:
         }
     }
 
-private:
+    // (public for PipelinedTriangleRefit, which shares the leaf rewrite)
     static constexpr uint32_t kBatch = 64;
 
     // A leaf inside the triangle array (always, for a structure vkas built or loaded; anything else is left alone).
@@ -486,7 +486,140 @@ struct TriangleProbe {
     }
 };
 
-void refitTriangles(const RefitJob& job) { refit::runRefit<TriangleRefitter>(job); }
+// The refit of a structure of one triangle geometry with float vertices and no transform (most meshes), in two
+// passes, so that the memory latency of the input (a random index and three random vertices a triangle) overlaps
+// across many leaves instead of a node's few:
+//   1. forward over the nodes, every leaf slot: a leaf goes through a pipeline of kAhead leaves in flight (its
+//      index entries requested when it enters, its vertices requested kStage leaves later, the leaf rewritten
+//      (TriangleRefitter::finishLeaf) and its box written into its node slot kStage leaves after that); a leaf that
+//      is not of whole lanes of the geometry's primitives is refitted at once by TriangleRefitter's general path;
+//   2. backward over the nodes (children after parents in preorder), every internal slot gets its child's box.
+// The same bytes as refit::refitTree with TriangleRefitter: leaf boxes and node boxes are the same unions.
+class PipelinedTriangleRefit {
+public:
+    template <class Reader>
+    static void run(const RefitJob& job, const Reader& reader) {
+        format::Header h;
+        std::memcpy(&h, job.src, sizeof h);
+        refit::copyUnchangedParts(job, h);
+        const auto* srcNodes = reinterpret_cast<const Node*>(job.src + h.nodeOffset);
+        auto* dstNodes = reinterpret_cast<Node*>(job.dst + h.nodeOffset);
+        if (job.src != job.dst) std::memcpy(dstNodes, srcNodes, uint64_t(h.nodeCount) * sizeof(Node));
+        const std::byte* srcRecords = job.src + h.recordOffset;
+        std::byte* dstRecords = job.dst + h.recordOffset;
+        TriangleRefitter general(job);
+        const uint32_t count = reader.primitiveCount();
+
+        Entry ring[kAhead];
+        uint64_t pushed = 0;
+        auto stageVertices = [&](Entry& e) {
+            for (uint32_t l = 0; l < e.leaf.src.n; ++l)
+                for (uint32_t c = 0; c < 3; ++c) {
+                    e.leaf.vertex[l][c] = reader.vertexPointer(e.leaf.src.primitiveIndex()[l], c);
+                    __builtin_prefetch(e.leaf.vertex[l][c], 0, 3);
+                }
+        };
+        auto stageFinish = [&](Entry& e) {
+            SimdBoxNanIgnored boxes[kNodeWidth];
+            e.leaf.slot = 0;
+            TriangleRefitter::finishLeaf<Reader::kVertex>(e.leaf, boxes);
+            setSlot(*e.node, e.slot, boxes[0]);
+        };
+        auto slotDone = [&](Node& node, uint32_t slot, ChildRef ref) {
+            if (!TriangleRefitter::inside(ref, h.recordCount)) return setSlot(node, slot, SimdBoxNanIgnored{});
+            const ConstTriangleLeaf leaf = triangleLeaf(srcRecords, leafFirst(ref), leafCount(ref));
+            bool whole = leaf.n >= 1 && leaf.n <= 4;
+            for (uint32_t l = 0; l < leaf.n && whole; ++l)
+                whole = leaf.geometryIndex(l) == 0 && leaf.primitiveIndex()[l] < count;
+            if (!whole) {
+                ChildRef refs[kNodeWidth] = {ref};
+                SimdBoxNanIgnored boxes[kNodeWidth];
+                general.leaves(srcRecords, dstRecords, refs, h.recordCount, boxes);
+                return setSlot(node, slot, boxes[0]);
+            }
+            Entry& e = ring[pushed % kAhead];
+            e.leaf.src = leaf, e.leaf.dst = triangleLeaf(dstRecords, leafFirst(ref), leafCount(ref));
+            e.node = &node, e.slot = slot;
+            for (uint32_t l = 0; l < leaf.n; ++l)
+                if (const std::byte* index = reader.indexPointer(leaf.primitiveIndex()[l])) __builtin_prefetch(index, 0, 3);
+            ++pushed;
+            if (pushed > kStage) stageVertices(ring[(pushed - 1 - kStage) % kAhead]);
+            if (pushed > 2 * kStage) stageFinish(ring[(pushed - 1 - 2 * kStage) % kAhead]);
+        };
+        for (uint64_t k = 0; k < h.nodeCount; ++k) {
+            // The leaves of a node a few ahead: a node's leaves lie between its subtrees' (leaf order is
+            // depth-first), so their addresses jump and no hardware prefetcher follows them.
+            if (k + kNodesAhead < h.nodeCount)
+                for (const ChildRef ref : srcNodes[k + kNodesAhead].child)
+                    if (TriangleRefitter::inside(ref, h.recordCount)) {
+                        const std::byte* leaf = srcRecords + kTriangleBytes * leafFirst(ref);
+                        for (uint64_t at = 0; at < kTriangleBytes * leafCount(ref); at += 64) __builtin_prefetch(leaf + at, 0, 3);
+                    }
+            for (uint32_t i = 0; i < kNodeWidth; ++i)
+                if (isLeaf(srcNodes[k].child[i])) slotDone(dstNodes[k], i, srcNodes[k].child[i]);
+        }
+        // The root as a leaf: its box is the header's (a one-slot node on the side).
+        Node rootSlot;
+        const bool rootLeaf = isLeaf(h.root);
+        if (rootLeaf) slotDone(rootSlot, 0, h.root);
+        // Drain the pipeline in order.
+        for (uint64_t j = pushed > kStage ? pushed - kStage : 0; j < pushed; ++j) stageVertices(ring[j % kAhead]);
+        for (uint64_t j = pushed > 2 * kStage ? pushed - 2 * kStage : 0; j < pushed; ++j) stageFinish(ring[j % kAhead]);
+
+        for (uint64_t k = h.nodeCount; k-- > 0;)
+            for (uint32_t i = 0; i < kNodeWidth; ++i) {
+                const ChildRef ref = srcNodes[k].child[i];
+                if (!isInternal(ref)) {
+                    if (!isLeaf(ref)) setSlot(dstNodes[k], i, SimdBoxNanIgnored{});  // empty (or unknown) slots
+                    continue;
+                }
+                const uint32_t c = nodeIndex(ref);
+                setSlot(dstNodes[k], i, c > k && c < h.nodeCount ? refit::nodeBox(dstNodes[c]) : SimdBoxNanIgnored{});
+            }
+        SimdBoxNanIgnored bounds;
+        if (rootLeaf) {
+            bounds.lower = _mm_setr_ps(rootSlot.lowerX[0], rootSlot.lowerY[0], rootSlot.lowerZ[0], 0.0f);
+            bounds.upper = _mm_setr_ps(rootSlot.upperX[0], rootSlot.upperY[0], rootSlot.upperZ[0], 0.0f);
+        } else if (isInternal(h.root) && nodeIndex(h.root) < h.nodeCount) {
+            bounds = refit::nodeBox(dstNodes[nodeIndex(h.root)]);
+        }
+        refit::finishHeader(job, h, bounds);
+    }
+
+private:
+    static constexpr uint32_t kStage = 8;           // leaves between requesting indices, vertices, and using them
+    static constexpr uint32_t kAhead = 2 * kStage + 1;
+    static constexpr uint64_t kNodesAhead = 4;      // nodes between requesting their leaves' records and reading them
+    struct Entry {
+        TriangleRefitter::PendingLeaf leaf;
+        Node* node;
+        uint32_t slot;
+    };
+    static void setSlot(Node& n, uint32_t i, const SimdBoxNanIgnored& b) {
+        alignas(16) float lo[4], up[4];
+        _mm_store_ps(lo, b.lower);
+        _mm_store_ps(up, b.upper);
+        n.lowerX[i] = lo[0], n.lowerY[i] = lo[1], n.lowerZ[i] = lo[2];
+        n.upperX[i] = up[0], n.upperY[i] = up[1], n.upperZ[i] = up[2];
+    }
+};
+
+void refitTriangles(const RefitJob& job) {
+    if (job.info->geometryCount == 1 && job.ranges[0].primitiveCount != 0) {
+        const TriangleSource source(buildGeometry(*job.info, 0).geometry.triangles, job.ranges[0]);
+        const bool pipelined = source.visit([&](auto reader) {
+            using Reader = decltype(reader);
+            if constexpr (Reader::kVertex != TriangleVertexKind::Other && !Reader::kTransform) {
+                PipelinedTriangleRefit::run(job, reader);
+                return true;
+            } else {
+                return false;
+            }
+        });
+        if (pipelined) return;
+    }
+    refit::runRefit<TriangleRefitter>(job);
+}
 
 ActivityViolation triangleActivity(const RefitJob& job) {
     TriangleProbe probe(job);
