@@ -125,6 +125,42 @@ struct DeviceImpl {
     CORE_COMMANDS(CORE_MEMBER)
 #undef CORE_MEMBER
 
+    // Batch buffers (packed rays and hits), kept for the next call: fresh memory costs page faults, a large part of
+    // a batch's time otherwise. One per concurrent call; at most kPoolKeep kept.
+    struct Batch {
+        std::unique_ptr<VkasRay[]> rays;
+        std::unique_ptr<VkasHit[]> hits;
+        size_t capacity = 0;
+        void reserve(size_t n) {
+            if (n <= capacity) return;
+            rays.reset();
+            hits.reset();
+            rays.reset(new VkasRay[n]);
+            hits.reset(new VkasHit[n]);
+            capacity = n;
+        }
+    };
+    static constexpr size_t kPoolKeep = 4;
+    std::mutex poolMutex;
+    std::vector<std::unique_ptr<Batch>> pool;
+    std::unique_ptr<Batch> takeBatch(size_t n) {
+        std::unique_ptr<Batch> b;
+        {
+            std::lock_guard<std::mutex> lock(poolMutex);
+            if (!pool.empty()) {
+                b = std::move(pool.back());
+                pool.pop_back();
+            }
+        }
+        if (!b) b = std::make_unique<Batch>();
+        b->reserve(std::max<size_t>(n, 1));
+        return b;
+    }
+    void giveBatch(std::unique_ptr<Batch> b) {
+        std::lock_guard<std::mutex> lock(poolMutex);
+        if (pool.size() < kPoolKeep) pool.push_back(std::move(b));
+    }
+
     DeviceImpl(bool validate, uint32_t threadCount) : validation(validate), requestedThreads(threadCount) {
         VkasDeviceCreateInfo ci{};
         ci.disableValidation = validate ? VK_FALSE : VK_TRUE;
@@ -571,20 +607,18 @@ void parallelChunks(size_t n, size_t chunk, unsigned threads, Fn&& fn) {
     if (error) std::rethrow_exception(error);
 }
 
-// Packs and checks rays (in parallel for big batches); throws ValueError for the first bad ray.
-std::unique_ptr<VkasRay[]> packRays(const DeviceImpl& d, const RayInputs& in) {
-    std::unique_ptr<VkasRay[]> rays(new VkasRay[std::max<size_t>(in.count, 1)]);
+// Packs and checks rays (in parallel for big batches) into rays; throws ValueError for the first bad ray.
+void packRays(const DeviceImpl& d, const RayInputs& in, VkasRay* rays) {
     constexpr size_t kChunk = 1 << 16;
     const size_t chunks = (in.count + kChunk - 1) / kChunk;
     std::vector<RayError> errors(std::max<size_t>(chunks, 1));
     {
         py::gil_scoped_release release;
         parallelChunks(in.count, kChunk, d.threads,
-                       [&](size_t c, size_t a, size_t b) { checkRays(in, a, b, rays.get(), errors[c]); });
+                       [&](size_t c, size_t a, size_t b) { checkRays(in, a, b, rays, errors[c]); });
     }
     for (const RayError& e : errors)
         if (e.kind) throwRayError(e);  // the first bad ray: chunks are in ray order
-    return rays;
 }
 
 // The ray-flag rules (06889-06891) and the top level (06352), as vkasTraceRays checks them: with zero rays, on the
@@ -735,25 +769,32 @@ public:
                      const py::array& tmin, const py::array& tmax, uint32_t flags, uint32_t mask, bool anyHit) {
         const RayInputs in = rayInputs(origins, directions, tmin, tmax);
         const VkAccelerationStructureKHR as = tlas ? tlas->as : VK_NULL_HANDLE;
-        std::unique_ptr<VkasRay[]> rays = packRays(*d, in);
         const size_t n = in.count;
-        std::unique_ptr<VkasHit[]> hits(new VkasHit[std::max<size_t>(n, 1)]);
+        struct Lease {
+            DeviceImpl& d;
+            std::unique_ptr<DeviceImpl::Batch> b;
+            ~Lease() { d.giveBatch(std::move(b)); }
+        } lease{*d, d->takeBatch(n)};
+        VkasRay* rays = lease.b->rays.get();
+        const VkasHit* hits = lease.b->hits.get();
+        packRays(*d, in, rays);
         {
             Capture capture;
             VkResult r;
             {
                 py::gil_scoped_release release;
                 r = vkasTraceRays(d->device, as, anyHit ? VKAS_TRACE_MODE_ANY_HIT : VKAS_TRACE_MODE_CLOSEST_HIT, flags,
-                                  mask, uint32_t(n), rays.get(), hits.get());
+                                  mask, uint32_t(n), rays, lease.b->hits.get());
             }
             capture.check(r, "vkasTraceRays");
         }
-        rays.reset();
         if (anyHit) {
             py::array_t<bool> out{py::ssize_t(n)};
             bool* o = out.mutable_data();
             py::gil_scoped_release release;
-            for (size_t i = 0; i < n; ++i) o[i] = hits[i].type != VKAS_COMMITTED_INTERSECTION_NONE;
+            parallelChunks(n, 1 << 16, d->threads, [&](size_t, size_t a, size_t b) {
+                for (size_t i = a; i < b; ++i) o[i] = hits[i].type != VKAS_COMMITTED_INTERSECTION_NONE;
+            });
             return out;
         }
         const py::ssize_t sn = py::ssize_t(n);
@@ -887,7 +928,13 @@ public:
                          bool anyHit, int repeats) {
         const float* p = arrayData<float>(packed, "packed", {-1, 8});
         const size_t n = size_t(packed.shape(0));
-        std::unique_ptr<VkasHit[]> hits(new VkasHit[std::max<size_t>(n, 1)]);
+        // The device's pooled hit buffer, as intersect uses it (warm memory on both sides).
+        struct Lease {
+            DeviceImpl& d;
+            std::unique_ptr<DeviceImpl::Batch> b;
+            ~Lease() { d.giveBatch(std::move(b)); }
+        } lease{*d, d->takeBatch(n)};
+        VkasHit* hits = lease.b->hits.get();
         double best = 1e300;
         Capture capture;
         VkResult r = VK_SUCCESS;
@@ -897,7 +944,7 @@ public:
                 const auto t0 = std::chrono::steady_clock::now();
                 r = vkasTraceRays(d->device, tlas ? tlas->as : VK_NULL_HANDLE,
                                   anyHit ? VKAS_TRACE_MODE_ANY_HIT : VKAS_TRACE_MODE_CLOSEST_HIT, flags, mask,
-                                  uint32_t(n), reinterpret_cast<const VkasRay*>(p), hits.get());
+                                  uint32_t(n), reinterpret_cast<const VkasRay*>(p), hits);
                 best = std::min(best, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
             }
         }
@@ -908,10 +955,9 @@ public:
     py::array packRaysForBench(const py::array& origins, const py::array& directions, const py::array& tmin,
                                const py::array& tmax) {
         const RayInputs in = rayInputs(origins, directions, tmin, tmax);
-        std::unique_ptr<VkasRay[]> rays = packRays(*d, in);
         py::array_t<float> out({py::ssize_t(in.count), py::ssize_t(8)});
         static_assert(sizeof(VkasRay) == 32);
-        std::memcpy(out.mutable_data(), rays.get(), in.count * sizeof(VkasRay));
+        packRays(*d, in, reinterpret_cast<VkasRay*>(out.mutable_data()));
         return out;
     }
 };

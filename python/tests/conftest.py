@@ -31,3 +31,7 @@ def dev():
 @pytest.fixture(scope="session")
 def dev_novalidation():
     return vkas.Device(validation=False, threads=0)
+
+
+def pytest_report_header(config):
+    return f"vkas {vkas.__version__} from {os.path.dirname(vkas.__file__)}"
