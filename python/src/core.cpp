@@ -714,8 +714,8 @@ public:
         return py::bytes(reinterpret_cast<const char*>(out->data()), out->size);
     }
 
-    // blob: a serialized structure; addresses: the handle array to write (one device address per entry, 0 for an
-    // inactive instance), or None to keep the blob's (only when it has no entries).
+    // blob: a serialized structure. With replace, bottoms gives the handle array to write: one structure per entry
+    // (its device address; null for 0, an inactive instance); without, the blob must have no entries.
     StructurePtr deserialize(const py::buffer& blob, const std::vector<StructurePtr>& bottoms, bool replace) {
         py::buffer_info b = blob.request();
         const uint64_t n = uint64_t(b.size) * uint64_t(b.itemsize);
