@@ -6,7 +6,10 @@
 #      and runs the same there, then runs each fuzz target for a bounded time (scripts/run-fuzzers.sh);
 #   (between the two: installs Mesa's lavapipe from bookworm-backports for the differential-conformance tests)
 #   3. installs build/ into a temporary prefix and builds the C package consumer against it
-#      (find_package(vkas) and pkg-config vkas).
+#      (find_package(vkas) and pkg-config vkas);
+#   4. the Python package (python/, docs/PYTHON.md): a virtual environment over Debian's /usr/bin/python3 with its
+#      system packages (build-python/venv), `pip install --no-build-isolation --no-index ./python` (offline, Debian's
+#      scikit-build-core; not under the sanitizers), then its pytest suite (python/tests) and the example script.
 # Every step runs even when an earlier one failed (except what needs a failed build); the last line is a
 # summary and the exit status is non-zero when anything failed.
 set -uo pipefail
@@ -133,6 +136,31 @@ if [[ -f build/CMakeCache.txt ]] && grep -q '^build ok' <(printf '%s\n' "${resul
   record "package" $?
 else
   record "package" 1 "skipped: build/ did not build"
+fi
+
+banner "python package (venv, pip install ./python, pytest python/tests)"
+# Debian's interpreter, whatever python3 is first on PATH (a pyenv one lacks Debian's numpy, pybind11, pytest).
+py_start=$SECONDS
+py_venv="$root/build-python/venv"
+py_log="$logdir/python.log"
+if ! "$root/scripts/setup-python.sh"; then
+  record "python" 1 "scripts/setup-python.sh could not install the Debian packages"
+elif ! { [[ -x $py_venv/bin/python ]] || /usr/bin/python3 -m venv --system-site-packages "$py_venv"; }; then
+  record "python" 1 "could not create $py_venv"
+elif ! CMAKE_BUILD_PARALLEL_LEVEL=$jobs "$py_venv/bin/pip" install --no-build-isolation --no-index --no-deps \
+       --force-reinstall "$root/python" 2>&1 | tee "$py_log" | tail -n 3; then
+  record "python" 1 "pip install ./python failed"
+else
+  # From outside the source tree, so that the installed package is the one imported.
+  (cd "$logdir" && "$py_venv/bin/python" -m pytest -q -p no:cacheprovider "$root/python/tests") 2>&1 | tee -a "$py_log"
+  py_status=${PIPESTATUS[0]}
+  py_counts=$(grep -Eo '[0-9]+ (passed|failed)[^=]*' "$py_log" | tail -1)
+  if ((py_status == 0)); then
+    (cd "$logdir" && "$py_venv/bin/python" "$root/python/examples/depth_normals.py" --width 160 --height 120 \
+       -o "$logdir/bunny") >>"$py_log" 2>&1 && [[ -s $logdir/bunny-depth.png && -s $logdir/bunny-normals.png ]] ||
+      { tail -n 20 "$py_log"; py_status=1; py_counts+="; examples/depth_normals.py FAILED"; }
+  fi
+  record "python" "$py_status" "${py_counts:-no pytest summary}; $((SECONDS - py_start))s"
 fi
 
 elapsed=$((SECONDS - start))
