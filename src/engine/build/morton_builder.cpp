@@ -192,9 +192,11 @@ struct Range {
 // references into the output array (the contract: leaves are ranges of refs).
 class TreeWriter {
 public:
-    TreeWriter(const uint64_t* keys, uint32_t indexBits, const PrimRef* sorted, PrimRef* out, Node* nodes,
-               uint32_t maxLeafSize)
-        : keys_(keys), indexBits_(indexBits), sorted_(sorted), out_(out), nodes_(nodes), maxLeafSize_(maxLeafSize) {}
+    // bucketBegin[d]: the first key whose top digit is d or more (the sort's buckets; d up to 2^kTopBits).
+    TreeWriter(const uint64_t* keys, const KeyLayout& layout, const uint32_t* bucketBegin, const PrimRef* sorted,
+               PrimRef* out, Node* nodes, uint32_t maxLeafSize)
+        : keys_(keys), indexBits_(layout.indexBits), layout_(layout), bucketBegin_(bucketBegin), sorted_(sorted),
+          out_(out), nodes_(nodes), maxLeafSize_(maxLeafSize) {}
 
     ChildRef build(const Range& r, SimdBoxNanSpreads& box) {
         if (r.count() <= maxLeafSize_) return leaf(r, box);
@@ -257,6 +259,14 @@ private:
         if (r.depth < format::kSahDepthLimit && first != last) {
             const int bit = 63 - __builtin_clzll(first ^ last);
             const uint64_t threshold = (last >> bit << bit) << indexBits_;  // common prefix, then the 1 bit
+            if (uint32_t(bit) >= layout_.codeBits() - kTopBits) {
+                // A bit of the top digit: every bit of the threshold below it is 0, so the first key at or above
+                // the threshold is where the sort's bucket of the threshold's top digit begins (the binary search's
+                // answer, without its cache misses over a large range).
+                left = {r.begin, bucketBegin_[layout_.topDigit(threshold)], r.depth + 1};
+                right = {left.end, r.end, r.depth + 1};
+                return;
+            }
             // Branch-free lower bound: the comparisons are unpredictable, a conditional move is not.
             const uint64_t* base = keys_ + r.begin;
             for (uint32_t len = r.count(); len > 1;) {
@@ -272,6 +282,8 @@ private:
 
     const uint64_t* keys_;
     uint32_t indexBits_;
+    KeyLayout layout_;
+    const uint32_t* bucketBegin_;
     const PrimRef* sorted_;
     PrimRef* out_;
     Node* nodes_;
@@ -318,7 +330,7 @@ BvhBuildResult buildMortonBvh(PrimRef* refs, uint32_t n, uint32_t maxLeafSize, N
     const uint64_t indexMask = layout.indexMask();
     for (uint32_t i = 0; i < n; ++i) sorted[i] = refs[keys[i] & indexMask];
 
-    TreeWriter writer(keys, layout.indexBits, sorted, refs, nodes, maxLeafSize);
+    TreeWriter writer(keys, layout, bucketBegin.data(), sorted, refs, nodes, maxLeafSize);
     SimdBoxNanSpreads rootBox;
     result.root = writer.build(Range{0, n, 0}, rootBox);
     result.nodeCount = writer.nodeCount();
