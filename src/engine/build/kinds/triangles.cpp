@@ -280,10 +280,7 @@ public:
             if constexpr (kFloats<Reader>) {
                 // A whole leaf of this geometry's primitives (nearly every leaf): refitted four lanes at a time.
                 const ConstTriangleLeaf leaf = triangleLeaf(src, leafFirst(refs[i]), leafCount(refs[i]));
-                bool whole = leaf.n >= 1 && leaf.n <= 4;
-                for (uint32_t l = 0; l < leaf.n && whole; ++l)
-                    whole = leaf.geometryIndex(l) == g && leaf.primitiveIndex()[l] < count;
-                if (whole) {
+                if (wholeLeaf(leaf, g, count)) {
                     PendingLeaf& p = leaves[leafN++];
                     p.src = leaf, p.dst = triangleLeaf(dst, leafFirst(refs[i]), leafCount(refs[i])), p.slot = i;
                     for (uint32_t l = 0; l < leaf.n; ++l)
@@ -333,6 +330,14 @@ public:
         }
     }
 
+    // A leaf that finishLeaf refits: one to four lanes, all primitives of geometry g below its count.
+    static bool wholeLeaf(const ConstTriangleLeaf& leaf, uint32_t g, uint32_t count) {
+        if (leaf.n < 1 || leaf.n > 4) return false;
+        for (uint32_t l = 0; l < leaf.n; ++l)
+            if (leaf.geometryIndex(l) != g || leaf.primitiveIndex()[l] >= count) return false;
+        return true;
+    }
+
     struct PendingLeaf {
         const std::byte* vertex[4][3];
         ConstTriangleLeaf src;
@@ -341,8 +346,7 @@ public:
     };
 
     // A whole leaf of float vertices without a transform: the lanes' vertices transposed into the leaf's rows
-    // (missing lanes repeat lane 0, and are not stored), the degenerate test of four lanes in double (the same
-    // products and differences as isDegenerateTriangle, so the same decisions as the build), the box from the rows.
+    // (missing lanes repeat lane 0, and are not stored), the build's degenerate test, the box from the vertices.
     // A leaf with a NaN coordinate goes through the per-lane path, whose decode decides activity and quiets NaNs.
     template <TriangleVertexKind V>
     static void finishLeaf(const PendingLeaf& p, SimdBoxNanIgnored boxes[kNodeWidth]) {
@@ -368,23 +372,9 @@ public:
             rows[c][0] = v[c][0], rows[c][1] = v[c][1], rows[c][2] = v[c][2], rows[c][3] = v[c][3];
             _MM_TRANSPOSE4_PS(rows[c][0], rows[c][1], rows[c][2], rows[c][3]);
         }
-        // Degenerate: n = e1 x e2 == 0 in double, two lanes at a time.
+        // Degenerate: the build's rule (isDegenerateTriangleSse), lane by lane.
         int degenerate = 0;
-        for (uint32_t half = 0; half < 2; ++half) {
-            auto lanes = [&](__m128 r) { return _mm_cvtps_pd(half ? _mm_movehl_ps(r, r) : r); };
-            __m128d e1[3], e2[3];
-            for (uint32_t a = 0; a < 3; ++a) {
-                const __m128d a0 = lanes(rows[0][a]);
-                e1[a] = _mm_sub_pd(lanes(rows[1][a]), a0);
-                e2[a] = _mm_sub_pd(lanes(rows[2][a]), a0);
-            }
-            const __m128d n0 = _mm_sub_pd(_mm_mul_pd(e1[1], e2[2]), _mm_mul_pd(e1[2], e2[1]));
-            const __m128d n1 = _mm_sub_pd(_mm_mul_pd(e1[2], e2[0]), _mm_mul_pd(e1[0], e2[2]));
-            const __m128d n2 = _mm_sub_pd(_mm_mul_pd(e1[0], e2[1]), _mm_mul_pd(e1[1], e2[0]));
-            const __m128d zero = _mm_setzero_pd();
-            const __m128d all = _mm_and_pd(_mm_and_pd(_mm_cmpeq_pd(n0, zero), _mm_cmpeq_pd(n1, zero)), _mm_cmpeq_pd(n2, zero));
-            degenerate |= _mm_movemask_pd(all) << (2 * half);
-        }
+        for (uint32_t l = 0; l < n; ++l) degenerate |= int(isDegenerateTriangleSse(v[0][l], v[1][l], v[2][l])) << l;
         // The rows, then the lane words (primitive indices are unchanged; geometry and flags re-packed).
         float* out = p.dst.row(0);
         switch (n) {
@@ -528,10 +518,7 @@ public:
         auto slotDone = [&](Node& node, uint32_t slot, ChildRef ref) {
             if (!TriangleRefitter::inside(ref, h.recordCount)) return setSlot(node, slot, SimdBoxNanIgnored{});
             const ConstTriangleLeaf leaf = triangleLeaf(srcRecords, leafFirst(ref), leafCount(ref));
-            bool whole = leaf.n >= 1 && leaf.n <= 4;
-            for (uint32_t l = 0; l < leaf.n && whole; ++l)
-                whole = leaf.geometryIndex(l) == 0 && leaf.primitiveIndex()[l] < count;
-            if (!whole) {
+            if (!TriangleRefitter::wholeLeaf(leaf, 0, count)) {
                 ChildRef refs[kNodeWidth] = {ref};
                 SimdBoxNanIgnored boxes[kNodeWidth];
                 general.leaves(srcRecords, dstRecords, refs, h.recordCount, boxes);
