@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "engine/build/tree_builder.hpp"
+#include "engine/build/wide_collapse.hpp"
 #include "engine/format/sizes.hpp"
 #include "engine/util/parallel_for.hpp"
 #include "vkas_test.hpp"
@@ -92,7 +93,7 @@ Built build(std::vector<PrimRef> refs, const BvhBuildSettings& settings, const P
     const uint32_t n = uint32_t(refs.size());
     b.nodes.resize(std::max<uint64_t>(1, maxWideNodeCount(n, settings.maxLeafSize)));
     std::memset(b.nodes.data(), 0, b.nodes.size() * sizeof(Node));
-    std::vector<uint64_t> workspace(n * kTreeWorkspacePerPrimitive / 8 + 2);  // 16-byte aligned on this platform
+    std::vector<uint64_t> workspace(n * treeWorkspacePerPrimitive(settings) / 8 + 2);  // 16-byte aligned on this platform
     b.result = buildTree(refs.data(), n, settings, b.nodes.data(), reinterpret_cast<std::byte*>(workspace.data()), parallel);
     b.nodes.resize(b.result.nodeCount);
     b.refs = std::move(refs);
@@ -120,6 +121,7 @@ TEST_F(TreeBuilders, both_builders_keep_the_output_contract_and_ignore_threading
                 const std::vector<PrimRef> refs = randomRefs(n);
                 const BvhBuildSettings settings = buildSettingsFor(maxLeaf, flags);
                 EXPECT_EQ(settings.morton, (flags & VK_BUILD_ACCELERATION_STRUCTURE_PREFER_FAST_BUILD_BIT_KHR) != 0);
+                EXPECT_EQ(settings.quality, (flags & VK_BUILD_ACCELERATION_STRUCTURE_PREFER_FAST_TRACE_BIT_KHR) != 0);
                 const Built serial = build(refs, settings, nullptr);
                 EXPECT_LE(serial.result.nodeCount, maxWideNodeCount(n, maxLeaf));
                 std::vector<uint32_t> seen(n, 0);
@@ -141,6 +143,41 @@ TEST_F(TreeBuilders, both_builders_keep_the_output_contract_and_ignore_threading
                                                                 serial.nodes.size() * sizeof(Node)) == 0);
                 EXPECT_TRUE(n == 0 || std::memcmp(threaded.refs.data(), serial.refs.data(), n * sizeof(PrimRef)) == 0);
             }
+        }
+    }
+}
+
+// The cost the quality builder's collapse minimises (build/wide_collapse.hpp), of a built tree: each internal node's
+// area times the node cost, each leaf's area times the leaf cost and its primitives'.
+double collapseCost(const Built& b, ChildRef ref, const Aabb& box, const CollapseCosts& c) {
+    const double area = box.halfArea();
+    if (format::isLeaf(ref)) return area * (c.leaf + c.primitive * format::leafCount(ref));
+    const Node& n = b.nodes[format::nodeIndex(ref)];
+    double cost = area * c.node;
+    for (uint32_t i = 0; i < format::kNodeWidth; ++i) {
+        if (n.child[i] == format::kEmptyRef) continue;
+        const Aabb slot{{n.lowerX[i], n.lowerY[i], n.lowerZ[i]}, {n.upperX[i], n.upperY[i], n.upperZ[i]}};
+        cost += collapseCost(b, n.child[i], slot, c);
+    }
+    return cost;
+}
+
+// The default build's greedy node filling makes its nodes from the same binned splits as the quality builder's
+// binary tree (the same ranges, bins and partitions), so its tree is one of those the collapse chooses from: the
+// collapse's can only cost less.
+TEST_F(TreeBuilders, the_quality_builders_collapse_costs_no_more_than_greedy_node_filling) {
+    for (uint32_t n : {5u, 9u, 33u, 1000u, 20000u, 150000u}) {
+        for (uint32_t maxLeaf : {format::kMaxPrimitivesPerLeaf, format::kMaxInstancesPerLeaf}) {
+            SCOPED_TRACE(::testing::Message() << "n " << n << " maxLeaf " << maxLeaf);
+            const std::vector<PrimRef> refs = randomRefs(n);
+            const BvhBuildSettings quality = buildSettingsFor(maxLeaf, VK_BUILD_ACCELERATION_STRUCTURE_PREFER_FAST_TRACE_BIT_KHR);
+            BvhBuildSettings greedy = quality;
+            greedy.quality = false;
+            const Built q = build(refs, quality, nullptr), g = build(refs, greedy, nullptr);
+            const double qc = collapseCost(q, q.result.root, q.result.bounds, CollapseCosts{});
+            const double gc = collapseCost(g, g.result.root, g.result.bounds, CollapseCosts{});
+            EXPECT_LE(qc, gc * (1 + 1e-5)) << "collapse " << qc << ", greedy " << gc;
+            std::cout << "  n " << n << " maxLeaf " << maxLeaf << ": collapse cost " << qc << ", greedy " << gc << "\n";
         }
     }
 }

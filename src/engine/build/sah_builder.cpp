@@ -108,6 +108,9 @@ public:
 
     uint32_t nodeCount() const { return nodeCount_; }
 
+    // One binary SAH split of r (more than one primitive) into left and right, as build() splits a node's children.
+    void splitRange(const Range& r, Range& left, Range& right) { split(r, left, right); }
+
 private:
     // Per axis and bin: the primitives' bounds and their count. SSE boxes: a primitive extends three bins with six
     // instructions. Counts are sums and bounds min/max, so chunks merged in any order give the same bins.
@@ -465,15 +468,11 @@ private:
     const ParallelFor& parallel_;
 };
 
-}  // namespace
-
-BvhBuildResult buildSahBvh(PrimRef* refs, uint32_t n, const BvhBuildSettings& settings, Node* nodes,
-                           std::byte* workspace, const ParallelFor* parallel) {
-    BvhBuildResult result;
-    if (n == 0) return result;
+// The range of all n refs with their bounds, in chunks on several threads for a parallel build (min/max: the same in
+// any order).
+Range rootRange(const PrimRef* refs, uint32_t n, const ParallelFor* parallel) {
     Range all;
     all.begin = 0, all.end = n;
-    // The root's bounds, in chunks on several threads for a parallel build (min/max: the same in any order).
     constexpr uint32_t kBoundsChunk = 65536;
     const uint32_t chunks = (n + kBoundsChunk - 1) / kBoundsChunk;
     std::vector<SimdBoxNanSpreads> bounds(chunks);
@@ -487,6 +486,52 @@ BvhBuildResult buildSahBvh(PrimRef* refs, uint32_t n, const BvhBuildSettings& se
     SimdBoxNanSpreads b;
     for (uint32_t c = 0; c < chunks; ++c) b.extend(bounds[c].lower, bounds[c].upper);
     all.bounds = b.aabb();
+    return all;
+}
+
+}  // namespace
+
+uint32_t buildBinarySahTree(PrimRef* refs, uint32_t n, const BvhBuildSettings& settings, BinaryNode* out,
+                            PrimRef* spare, const ParallelFor* parallel) {
+    if (n == 0) return 0;
+    WideBuilder splitter(refs, settings, static_cast<Node*>(nullptr), parallel);
+    if (n >= kStablePartitionMin) splitter.useSpare(spare);
+    // Depth first, the left child first: node indices in preorder, so every child's index is above its parent's.
+    struct Pending {
+        Range range;
+        uint32_t index;
+    };
+    std::vector<Pending> stack;
+    stack.push_back({rootRange(refs, n, parallel), 0});
+    out[0].parent = BinaryNode::kNone;
+    uint32_t count = 1;
+    while (!stack.empty()) {
+        const Pending p = stack.back();
+        stack.pop_back();
+        BinaryNode& node = out[p.index];
+        node.setBox(p.range.bounds);
+        node.primCount = p.range.count();
+        if (p.range.count() == 1) {
+            node.child[0] = p.range.begin;
+            node.child[1] = BinaryNode::kNone;
+            continue;
+        }
+        Range left, right;
+        splitter.splitRange(p.range, left, right);
+        const uint32_t l = count++, r = count++;
+        node.child[0] = l, node.child[1] = r;
+        out[l].parent = out[r].parent = p.index;
+        stack.push_back({right, r});
+        stack.push_back({left, l});
+    }
+    return count;
+}
+
+BvhBuildResult buildSahBvh(PrimRef* refs, uint32_t n, const BvhBuildSettings& settings, Node* nodes,
+                           std::byte* workspace, const ParallelFor* parallel) {
+    BvhBuildResult result;
+    if (n == 0) return result;
+    Range all = rootRange(refs, n, parallel);
     result.bounds = all.bounds;
     // Builds with large ranges partition those through a spare array (the workspace), with threads or without: the
     // same tree.

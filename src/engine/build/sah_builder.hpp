@@ -6,6 +6,7 @@
 
 #include <cstdint>
 
+#include "engine/build/binary_tree.hpp"
 #include "engine/build/tree_builder.hpp"
 
 namespace vkas {
@@ -14,5 +15,11 @@ namespace vkas {
 // order the serial build uses, so the nodes and refs are byte-identical to a build without it.
 BvhBuildResult buildSahBvh(PrimRef* refs, uint32_t n, const BvhBuildSettings& settings, format::Node* nodes,
                            std::byte* workspace, const ParallelFor* parallel = nullptr);
+
+// The binary tree of the same splits, down to single primitives, into out[0..2n-1) (root 0, preorder: children
+// after their parent); refs reordered in place, `spare` (n PrimRefs) the stable partition's buffer. Returns the node
+// count, 2n - 1.
+uint32_t buildBinarySahTree(PrimRef* refs, uint32_t n, const BvhBuildSettings& settings, BinaryNode* out,
+                            PrimRef* spare, const ParallelFor* parallel = nullptr);
 
 }  // namespace vkas

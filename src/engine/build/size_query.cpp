@@ -17,12 +17,13 @@ StructureSizes structureSizes(const VkAccelerationStructureBuildGeometryInfoKHR&
                                            ? format::StructureType::TopLevel
                                            : format::StructureType::BottomLevel;
     const bool motion = usesMotionRecords(info);
+    const BvhBuildSettings settings = buildSettingsFor(maxLeafSize(type), info.flags);
     StructureSizes s;
     s.structureSize = maxStructureSize(type, recordPrimitiveType(info), info.geometryCount, primitiveCount, motion);
     s.buildScratchSize = primitiveCount == 0
                              ? 0
                              : kScratchAlignment + primitiveCount * (sizeof(PrimRef) + gatheredRecordSize(type, motion) +
-                                                                     kTreeWorkspacePerPrimitive);
+                                                                     treeWorkspacePerPrimitive(settings));
     s.updateScratchSize = 0;  // a refit works in the structure itself (build/refit.hpp)
     return s;
 }

@@ -1,6 +1,6 @@
 // What vkGetAccelerationStructureBuildSizesKHR reports: the format's largest structure for the inputs, and the
 // scratch memory a build of them uses (PrimRef[n], the temporary records[n], then the tree builders' workspace,
-// kTreeWorkspacePerPrimitive bytes a primitive; from the first 64-byte aligned address of the scratch buffer).
+// treeWorkspacePerPrimitive bytes a primitive, which depend on the build flags; from the first 64-byte aligned address of the scratch buffer).
 #pragma once
 
 #include <vulkan/vulkan_core.h>

@@ -3,6 +3,7 @@
 #include <vulkan/vulkan_core.h>
 
 #include "engine/build/morton_builder.hpp"
+#include "engine/build/quality_builder.hpp"
 #include "engine/build/sah_builder.hpp"
 
 namespace vkas {
@@ -13,12 +14,18 @@ BvhBuildSettings buildSettingsFor(uint32_t maxLeafSize, uint32_t buildFlags) {
     if ((buildFlags & VK_BUILD_ACCELERATION_STRUCTURE_PREFER_FAST_TRACE_BIT_KHR) ||
         maxLeafSize == format::kMaxInstancesPerLeaf)
         s.fewBinsBelow = 0;
+    if ((buildFlags & VK_BUILD_ACCELERATION_STRUCTURE_PREFER_FAST_TRACE_BIT_KHR) && !s.morton) s.quality = true;
     return s;
+}
+
+uint64_t treeWorkspacePerPrimitive(const BvhBuildSettings& settings) {
+    return settings.quality ? qualityWorkspacePerPrimitive() : kTreeWorkspacePerPrimitive;
 }
 
 BvhBuildResult buildTree(PrimRef* refs, uint32_t n, const BvhBuildSettings& settings, format::Node* nodes,
                          std::byte* workspace, const ParallelFor* parallel) {
     if (settings.morton) return buildMortonBvh(refs, n, settings.maxLeafSize, nodes, workspace, parallel);
+    if (settings.quality) return buildQualityBvh(refs, n, settings, nodes, workspace, parallel);
     return buildSahBvh(refs, n, settings, nodes, workspace, parallel);
 }
 

@@ -37,11 +37,13 @@ struct BvhBuildSettings {
     uint32_t fewBinsBelow = 4096;  // ranges of fewer primitives get 8 bins (faster, about 1% more SAH cost); 0: never
     bool largestAxisOnly = false;  // bin only along the axis of the largest extent (faster, coarser)
     bool morton = false;  // build with the Morton-code builder (morton_builder.hpp) instead of the SAH
+    bool quality = false;  // build with the quality builder (quality_builder.hpp): binary SAH, optimal collapse
 };
 
 // The settings a build's flags ask for: PREFER_FAST_BUILD the Morton-code builder (several times faster, a somewhat
-// coarser tree); everything else the binned SAH, with 32 bins at every size for PREFER_FAST_TRACE and for top levels
-// (an instance costs a whole bottom-level traversal, and instance counts are small).
+// coarser tree); PREFER_FAST_TRACE the quality builder (a better tree, several times slower to build); everything
+// else the binned SAH, with 32 bins at every size for PREFER_FAST_TRACE and for top levels (an instance costs a whole
+// bottom-level traversal, and instance counts are small).
 BvhBuildSettings buildSettingsFor(uint32_t maxLeafSize, uint32_t buildFlags);
 
 struct BvhBuildResult {
@@ -56,8 +58,12 @@ struct BvhBuildResult {
 // builder's keys (two 8-byte words: the sort's two buffers) and sorted PrimRefs.
 constexpr uint64_t kTreeWorkspacePerPrimitive = 48;
 
+// The workspace bytes per primitive of the builder `settings` names: kTreeWorkspacePerPrimitive, or more for the
+// quality builder (quality_builder.hpp).
+uint64_t treeWorkspacePerPrimitive(const BvhBuildSettings& settings);
+
 // Builds over refs[0..n) (reordered in place) into nodes[0..nodeCount) with the builder `settings` names;
-// `workspace` holds n * kTreeWorkspacePerPrimitive bytes, 16-byte aligned. With `parallel`, the output is
+// `workspace` holds n * treeWorkspacePerPrimitive(settings) bytes, 16-byte aligned. With `parallel`, the output is
 // byte-identical to a build without it.
 BvhBuildResult buildTree(PrimRef* refs, uint32_t n, const BvhBuildSettings& settings, format::Node* nodes,
                          std::byte* workspace, const ParallelFor* parallel = nullptr);
