@@ -245,6 +245,36 @@ SahCost VkasEngine::sah(const Structure& s) {
     return c;
 }
 
+VkasEngine::RoundTrip VkasEngine::serializeRoundTrip(const Structure& s, uint64_t size, uint64_t usedSize) {
+    RoundTrip r;
+    check(vkWriteAccelerationStructuresPropertiesKHR(dev_, 1, &s.as, VK_QUERY_TYPE_ACCELERATION_STRUCTURE_SERIALIZATION_SIZE_KHR,
+                                                     sizeof r.blobBytes, &r.blobBytes, sizeof r.blobBytes),
+          "vkWriteAccelerationStructuresPropertiesKHR (serialization size)");
+    std::vector<unsigned char> blob(r.blobBytes);
+    VkCopyAccelerationStructureToMemoryInfoKHR out{VK_STRUCTURE_TYPE_COPY_ACCELERATION_STRUCTURE_TO_MEMORY_INFO_KHR};
+    out.src = s.as;
+    out.dst.hostAddress = blob.data();
+    out.mode = VK_COPY_ACCELERATION_STRUCTURE_MODE_SERIALIZE_KHR;
+    auto t0 = std::chrono::steady_clock::now();
+    check(vkCopyAccelerationStructureToMemoryKHR(dev_, VK_NULL_HANDLE, &out), "vkCopyAccelerationStructureToMemoryKHR");
+    r.serializeMs = msSince(t0);
+    r.s = create(VK_ACCELERATION_STRUCTURE_TYPE_BOTTOM_LEVEL_KHR, size);
+    VkCopyMemoryToAccelerationStructureInfoKHR in{VK_STRUCTURE_TYPE_COPY_MEMORY_TO_ACCELERATION_STRUCTURE_INFO_KHR};
+    in.src.hostAddress = blob.data();
+    in.dst = r.s.as;
+    in.mode = VK_COPY_ACCELERATION_STRUCTURE_MODE_DESERIALIZE_KHR;
+    t0 = std::chrono::steady_clock::now();
+    check(vkCopyMemoryToAccelerationStructureKHR(dev_, VK_NULL_HANDLE, &in), "vkCopyMemoryToAccelerationStructureKHR");
+    r.deserializeMs = msSince(t0);
+    void *a = nullptr, *b = nullptr;
+    check(vkMapMemory(dev_, s.memory, 0, VK_WHOLE_SIZE, 0, &a), "vkMapMemory");
+    check(vkMapMemory(dev_, r.s.memory, 0, VK_WHOLE_SIZE, 0, &b), "vkMapMemory");
+    r.bytesEqual = std::memcmp(a, b, usedSize) == 0;
+    vkUnmapMemory(dev_, s.memory);
+    vkUnmapMemory(dev_, r.s.memory);
+    return r;
+}
+
 double VkasEngine::traceBatch(VkAccelerationStructureKHR tlas, bool anyHit, const std::vector<VkasRay>& rays,
                               std::vector<Hit>& hits, int reps) {
     std::vector<VkasHit> out(rays.size());

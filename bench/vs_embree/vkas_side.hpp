@@ -52,6 +52,16 @@ public:
                     VkAccelerationStructureKHR blas, VkBuildAccelerationStructureFlagsKHR flags, int reps);
 
     SahCost sah(const Structure& s);
+    // s serialized to host memory (vkCopyAccelerationStructureToMemoryKHR) and the blob deserialized into a new
+    // structure of `size` bytes (vkCopyMemoryToAccelerationStructureKHR): the blob's size, both times, and whether
+    // the new structure's first `usedSize` bytes equal the source's.
+    struct RoundTrip {
+        Structure s;
+        uint64_t blobBytes = 0;
+        double serializeMs = 0, deserializeMs = 0;
+        bool bytesEqual = false;
+    };
+    RoundTrip serializeRoundTrip(const Structure& s, uint64_t size, uint64_t usedSize);
     void destroy(Structure& s);
 
     // Batch traversal on the device's worker threads; returns the best time of `reps` calls.
@@ -75,7 +85,8 @@ private:
     X(vkUnmapMemory) X(vkGetAccelerationStructureBuildSizesKHR) X(vkCreateAccelerationStructureKHR)                \
     X(vkBuildAccelerationStructuresKHR) X(vkWriteAccelerationStructuresPropertiesKHR)                             \
     X(vkCreateDeferredOperationKHR) X(vkDeferredOperationJoinKHR) X(vkGetDeferredOperationResultKHR)               \
-    X(vkDestroyDeferredOperationKHR) X(vkDestroyAccelerationStructureKHR) X(vkDestroyBuffer) X(vkFreeMemory)
+    X(vkDestroyDeferredOperationKHR) X(vkDestroyAccelerationStructureKHR) X(vkDestroyBuffer) X(vkFreeMemory)       \
+    X(vkCopyAccelerationStructureToMemoryKHR) X(vkCopyMemoryToAccelerationStructureKHR)
 #define VB_DECLARE(name) PFN_##name name = nullptr;
     VB_VKAS_COMMANDS(VB_DECLARE)
 #undef VB_DECLARE
