@@ -4,7 +4,10 @@
 // rays. Under `valgrind --tool=callgrind --toggle-collect='vb::measuredTrace*'` (one --kind) the instruction count
 // of the trace alone is repeatable to the instruction, whatever else the machine runs.
 //   vkas_bench_tree_quality --scene torcs-forza [--flags default fast-trace fast-build] [--rays N] [--kind diffuse]
+//                           [--ray-query] [--denormals-are-zero]
 #include <CLI/CLI.hpp>
+
+#include <xmmintrin.h>
 
 #include <cstdio>
 #include <map>
@@ -21,6 +24,11 @@ __attribute__((noinline)) double measuredTrace(VkasEngine& engine, VkAcceleratio
     return engine.traceBatch(tlas, anyHit, rays, hits, reps);
 }
 
+__attribute__((noinline)) double measuredQuery(VkasEngine& engine, VkAccelerationStructureKHR tlas, bool anyHit,
+                                               const std::vector<VkasRay>& rays, std::vector<Hit>& hits, int reps) {
+    return engine.traceRayQuery(tlas, anyHit, rays, hits, reps);
+}
+
 }  // namespace vb
 
 int main(int argc, char** argv) {
@@ -31,11 +39,16 @@ int main(int argc, char** argv) {
     std::vector<std::string> kinds{"camera", "diffuse", "shadow"};
     size_t rayCount = size_t(1) << 18;
     int reps = 3;
+    bool denormalsAreZero = false, rayQuery = false;
     app.add_option("--scene", sceneName, "a named scene of vkas_bench_embree (--list there)");
     app.add_option("--flags", flagNames, "build preferences: default, fast-trace, fast-build");
     app.add_option("--kind", kinds, "ray kinds: camera, diffuse, shadow");
     app.add_option("--rays", rayCount, "rays of each kind");
     app.add_option("--reps", reps, "repetitions, best taken");
+    app.add_flag("--denormals-are-zero", denormalsAreZero,
+                 "set MXCSR's flush-to-zero and denormals-are-zero bits on this thread first (a diagnostic: does a "
+                 "tree's speed hang on denormal operands? with --ray-query, the traversal runs on this thread)");
+    app.add_flag("--ray-query", rayQuery, "trace with vkasRayQuery* on this thread instead of vkasTraceRays");
     app.add_option("--data-dir", dataDir, "where scripts/setup-bench.sh extracted the CGAL meshes");
     CLI11_PARSE(app, argc, argv);
     if (dataDir.empty()) dataDir = std::string(getenv("HOME") ? getenv("HOME") : "/tmp") + "/.cache/vkas-bench";
@@ -46,6 +59,7 @@ int main(int argc, char** argv) {
     try {
         const Scene scene = makeScene(sceneName, false, dataDir, 0);
         if (scene.manyInstances()) throw std::runtime_error("a mesh scene, please");
+        if (denormalsAreZero) _mm_setcsr(_mm_getcsr() | 0x8040);  // FTZ (bit 15) and DAZ (bit 6)
         VkasEngine engine(1);
         // The rays, the same for every build: diffuse and shadow rays start at the default build's camera hits.
         const std::vector<VkasRay> camera = cameraRays(scene, rayCount);
@@ -73,7 +87,8 @@ int main(int argc, char** argv) {
             for (const std::string& k : kinds) {
                 if (!rays.count(k)) throw std::runtime_error("unknown --kind " + k);
                 std::vector<Hit> hits;
-                const double ms = measuredTrace(engine, tlas.s.as, k == "shadow", rays[k], hits, reps);
+                const double ms = rayQuery ? measuredQuery(engine, tlas.s.as, k == "shadow", rays[k], hits, reps)
+                                          : measuredTrace(engine, tlas.s.as, k == "shadow", rays[k], hits, reps);
                 std::printf(" %9.3f", double(rays[k].size()) / ms / 1000.0);
             }
             std::printf("\n");
