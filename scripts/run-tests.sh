@@ -5,6 +5,9 @@
 #   2. builds with AddressSanitizer + UndefinedBehaviorSanitizer in build-asan/ (with Clang, and the libFuzzer targets)
 #      and runs the same there, then runs each fuzz target for a bounded time (scripts/run-fuzzers.sh);
 #   (between the two: installs Mesa's lavapipe from bookworm-backports for the differential-conformance tests)
+#   tsan: builds the threaded tests and the stress program with ThreadSanitizer in build-tsan/ (Clang, VKAS_TSAN=ON)
+#      and runs vkas_test_concurrency, vkas_test_host_threading and vkas_stress (${VKAS_TSAN_STRESS_SECONDS:-15} s);
+#      any report fails the step (halt_on_error). `scripts/run-tests.sh --only tsan` runs this step alone;
 #   3. installs build/ into a temporary prefix and builds the C package consumer against it
 #      (find_package(vkas) and pkg-config vkas);
 #   4. the Python package (python/, docs/PYTHON.md): a virtual environment over Debian's /usr/bin/python3 with its
@@ -13,6 +16,11 @@
 # Every step runs even when an earlier one failed (except what needs a failed build); the last line is a
 # summary and the exit status is non-zero when anything failed.
 set -uo pipefail
+only=
+if [[ ${1:-} == --only ]]; then
+  only=${2:-}
+  [[ $only == tsan ]] || { echo "run-tests: --only takes: tsan" >&2; exit 2; }
+fi
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 cd "$root"
 jobs=${VKAS_JOBS:-2}
@@ -61,6 +69,59 @@ tool_smoke() {
   [[ -s $logdir/$name.png ]] || status=1
   record "$name" "$status" "vkas info, vkas render 160x120"
 }
+
+# tsan_step: ThreadSanitizer (issue 20). Only the threaded programs: the whole suite under TSan would not fit CI's time.
+tsan_step() {
+  banner "build-tsan/ (ThreadSanitizer, Clang: vkas_test_concurrency, vkas_test_host_threading, vkas_stress)"
+  local tsan_start=$SECONDS status=0 fresh=() log="$logdir/tsan.log"
+  if [[ -f build-tsan/CMakeCache.txt ]] &&
+     ! grep -Eq '^CMAKE_CXX_COMPILER:[A-Z]+=.*clang\+\+$' build-tsan/CMakeCache.txt; then
+    fresh=(--fresh)
+  fi
+  if ! CC=clang CXX=clang++ cmake "${fresh[@]}" -S . -B build-tsan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DVKAS_TSAN=ON \
+         -DVKAS_SANITIZE=OFF -DVKAS_BUILD_TESTS=ON -DVKAS_BUILD_BENCH=OFF -DVKAS_BUILD_TOOLS=OFF -DVKAS_BUILD_FUZZERS=OFF ||
+     ! cmake --build build-tsan -j"$jobs" --target vkas_test_concurrency vkas_test_host_threading vkas_stress; then
+    record "tsan" 1 "build-tsan/ did not build"
+    return
+  fi
+  local built=$((SECONDS - tsan_start))
+  # halt_on_error: the first report ends the program with a non-zero status.
+  export TSAN_OPTIONS=${TSAN_OPTIONS:-halt_on_error=1 second_deadlock_stack=1}
+  local program
+  for program in vkas_test_concurrency vkas_test_host_threading; do
+    build-tsan/tests/$program 2>&1 | tee -a "$log" | grep -E '^\[  (PASSED|FAILED) |WARNING: ThreadSanitizer|SEED'
+    [[ ${PIPESTATUS[0]} == 0 ]] || status=1
+  done
+  build-tsan/tests/vkas_stress --seconds "${VKAS_TSAN_STRESS_SECONDS:-15}" --threads 4 2>&1 | tee -a "$log" |
+    grep -Ev '^  '
+  [[ ${PIPESTATUS[0]} == 0 ]] || status=1
+  if grep -q 'WARNING: ThreadSanitizer' "$log"; then
+    grep -A40 'WARNING: ThreadSanitizer' "$log" | head -80
+    status=1
+  elif ((status)); then
+    tail -n 60 "$log"
+  fi
+  unset TSAN_OPTIONS
+  record "tsan" "$status" "2 test programs and vkas_stress ${VKAS_TSAN_STRESS_SECONDS:-15}s; build ${built}s, total $((SECONDS - tsan_start))s"
+}
+
+summary_and_exit() {
+  elapsed=$((SECONDS - start))
+  banner "summary"
+  printf '  %s\n' "${results[@]}"
+  summary=$(IFS=';'; echo "${results[*]}")
+  if ((failed)); then
+    echo "run-tests: FAILED in ${elapsed}s: ${summary//;/, }"
+    exit 1
+  fi
+  echo "run-tests: PASSED in ${elapsed}s: ${summary//;/, }"
+  exit 0
+}
+
+if [[ $only == tsan ]]; then
+  tsan_step
+  summary_and_exit
+fi
 
 banner "dependencies"
 if ! "$root/scripts/setup-deps.sh"; then
@@ -130,6 +191,8 @@ else
 fi
 unset ASAN_OPTIONS UBSAN_OPTIONS
 
+tsan_step
+
 banner "package consumer (install, find_package, pkg-config)"
 if [[ -f build/CMakeCache.txt ]] && grep -q '^build ok' <(printf '%s\n' "${results[@]}"); then
   "$root/scripts/check-package.sh" build
@@ -163,12 +226,4 @@ else
   record "python" "$py_status" "${py_counts:-no pytest summary}; $((SECONDS - py_start))s"
 fi
 
-elapsed=$((SECONDS - start))
-banner "summary"
-printf '  %s\n' "${results[@]}"
-summary=$(IFS=';'; echo "${results[*]}")
-if ((failed)); then
-  echo "run-tests: FAILED in ${elapsed}s: ${summary//;/, }"
-  exit 1
-fi
-echo "run-tests: PASSED in ${elapsed}s: ${summary//;/, }"
+summary_and_exit
