@@ -9,8 +9,11 @@
 // thread only) and must give the same digests. A thread's sequence depends only on the master seed and its index,
 // never on timing, so `--seed X --threads N --ops K` replays it.
 //
-// --soak: rounds of --round-seconds each (fresh per-thread state every round, shared structures kept), the resident
-// set size (VmRSS) sampled after every round; memory growing past a small tolerance after warm-up fails the run.
+// --soak: rounds of --round-seconds each (fresh per-thread state every round, shared structures kept). Between rounds,
+// with every worker joined, the program samples the heap bytes in use (glibc's mallinfo2, over every arena) and the
+// resident set size (VmRSS). The heap bytes in use are the leak test: they must come back to the warm-up's level
+// after every round. RSS, which also holds what the allocator keeps and which arenas fragment, is checked for a
+// trend only: the median of the last third of the rounds against the median of the first third after warm-up.
 #include <malloc.h>
 #include <xxhash.h>
 
@@ -486,6 +489,12 @@ struct Phase {
     bool failed = false;
 };
 
+// The heap bytes the program holds: in use in every malloc arena plus the blocks mapped on their own.
+uint64_t heapBytesInUse() {
+    const struct mallinfo2 m = mallinfo2();
+    return uint64_t(m.uordblks) + uint64_t(m.hblkhd);
+}
+
 // Runs the threads until the deadline. On a failure prints it and sets gStop.
 Phase runPhase(const Options& o, std::vector<std::unique_ptr<Shared>>& shared, uint32_t round, Clock::time_point deadline) {
     Phase p;
@@ -593,29 +602,49 @@ int main(int argc, char** argv) {
     auto seconds = [](double s) { return std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(s)); };
     int status = 0;
     if (o.soak) {
+        // Fixed, so that glibc's threshold does not climb with the freed sizes: large blocks (structure memory) are
+        // mapped and unmapped, and RSS follows what is live rather than what an arena once held.
+        mallopt(M_MMAP_THRESHOLD, 1 << 20);
         const uint32_t rounds = std::max(1u, uint32_t(o.seconds / o.roundSeconds));
         const uint32_t warmup = std::min(3u, rounds - 1);
-        uint64_t baseline = 0;
+        uint64_t baselineHeap = 0;
+        std::vector<double> rssAfter;  // MiB, rounds after warm-up
         for (uint32_t r = 0; r < rounds && !status; ++r) {
             const auto roundStart = Clock::now();
             Phase p = runPhase(o, shared, r, std::min(roundStart + seconds(o.roundSeconds), start + seconds(o.seconds)));
             if (p.failed) status = 1;
-            malloc_trim(0);
-            const uint64_t rss = hk::residentBytes();
             uint64_t ops = 0;
             for (uint64_t n : p.ops) ops += n;
-            if (r < warmup || baseline == 0)
-                baseline = std::max(baseline, rss);
-            const uint64_t limit = baseline + std::max<uint64_t>(32ull << 20, baseline / 10);
-            std::printf("vkas_stress: round %u/%u: %" PRIu64 " commands, %.1f s, VmRSS %.1f MiB%s\n", r + 1, rounds, ops,
-                        std::chrono::duration<double>(Clock::now() - roundStart).count(), rss / 1048576.0,
-                        r < warmup ? " (warm-up)" : "");
+            p = Phase{};  // the round's records go too: what stays is the shared structures and the devices
+            malloc_trim(0);
+            const uint64_t heap = heapBytesInUse(), rss = hk::residentBytes();
+            if (r < warmup || baselineHeap == 0) baselineHeap = std::max(baselineHeap, heap);
+            else rssAfter.push_back(rss / 1048576.0);
+            // The tolerance: what a few caches of the C++ runtime and the allocator's own bookkeeping may add.
+            const uint64_t heapLimit = baselineHeap + std::max<uint64_t>(1ull << 20, baselineHeap / 100);
+            std::printf("vkas_stress: round %u/%u: %" PRIu64 " commands, %.1f s, heap in use %.2f MiB, VmRSS %.1f MiB%s\n",
+                        r + 1, rounds, ops, std::chrono::duration<double>(Clock::now() - roundStart).count(),
+                        heap / 1048576.0, rss / 1048576.0, r < warmup ? " (warm-up)" : "");
             std::fflush(stdout);
-            if (r >= warmup && rss > limit) {
-                std::printf("vkas_stress: FAILED: memory grew to %.1f MiB, past %.1f MiB (warm-up peak %.1f MiB + tolerance); "
-                            "seed %" PRIu64 "\n", rss / 1048576.0, limit / 1048576.0, baseline / 1048576.0, o.seed);
+            if (r >= warmup && heap > heapLimit) {
+                std::printf("vkas_stress: FAILED: heap in use grew to %.2f MiB between rounds, past %.2f MiB (warm-up "
+                            "peak %.2f MiB + tolerance): a leak; seed %" PRIu64 "\n",
+                            heap / 1048576.0, heapLimit / 1048576.0, baselineHeap / 1048576.0, o.seed);
                 status = 1;
             }
+        }
+        if (!status && rssAfter.size() >= 6) {
+            auto median = [](std::vector<double> v) {
+                std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+                return v[v.size() / 2];
+            };
+            const size_t third = rssAfter.size() / 3;
+            const double first = median({rssAfter.begin(), rssAfter.begin() + third});
+            const double last = median({rssAfter.end() - third, rssAfter.end()});
+            const bool flat = last <= first * 1.25 + 32;
+            std::printf("vkas_stress: VmRSS between rounds, median of the first third %.1f MiB, of the last third %.1f "
+                        "MiB: %s\n", first, last, flat ? "flat" : "GROWING");
+            if (!flat) status = 1;
         }
     } else {
         // With the replay, the concurrent phase has 60% of the time and the replay the rest: it redoes the commands
