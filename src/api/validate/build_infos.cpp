@@ -1,3 +1,4 @@
+#include "engine/util/host_memory.hpp"
 #include "api/validate/build_infos.hpp"
 
 #include <algorithm>
@@ -46,7 +47,7 @@ struct InfoFootprint {
     const AccelerationStructure* dst = nullptr;
     const AccelerationStructure* src = nullptr;  // UPDATE only
     Span scratch;
-    std::vector<const AccelerationStructure*> referenced;
+    HostVector<const AccelerationStructure*> referenced;
 };
 
 // The structure a build info names as dstAccelerationStructure or srcAccelerationStructure: reports a handle that
@@ -184,7 +185,7 @@ void checkBuildAccelerationStructures(Validator& v, const Device& dev, VkDeferre
     v.check(ppBuildRangeInfos != nullptr || infoCount == 0,
             "VUID-vkBuildAccelerationStructuresKHR-ppBuildRangeInfos-parameter", "ppBuildRangeInfos is NULL.");
     if (v.failed()) return;
-    std::vector<InfoFootprint> footprints(infoCount);
+    HostVector<InfoFootprint> footprints(infoCount);
     std::unordered_set<const void*> dsts;
     for (uint32_t i = 0; i < infoCount; ++i) {
         v.check(ppBuildRangeInfos[i] != nullptr || pInfos[i].geometryCount == 0,

@@ -1,3 +1,4 @@
+#include "engine/util/host_memory.hpp"
 #include "api/validate/build_ranges.hpp"
 
 #include <algorithm>
@@ -149,7 +150,7 @@ void checkTrianglesRange(Validator& v, const VkAccelerationStructureGeometryTria
 bool checkInstancesRange(Validator& v, const Device& dev, const VkAccelerationStructureGeometryInstancesDataKHR& inst,
                          const VkAccelerationStructureBuildRangeInfoKHR& r,
                          VkBuildAccelerationStructureFlagsKHR buildFlags, const char* where,
-                         std::vector<const AccelerationStructure*>& referenced) {
+                         HostVector<const AccelerationStructure*>& referenced) {
     v.check(r.primitiveOffset % 16 == 0, "VUID-VkAccelerationStructureBuildRangeInfoKHR-primitiveOffset-03660",
             "%s: primitiveOffset %u is not a multiple of 16.", where, r.primitiveOffset);
     if (!v.check(r.primitiveCount <= limits::kMaxInstanceCount,

@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "engine/util/host_memory.hpp"
 #include "api/device.hpp"
 #include "api/validate/validator.hpp"
 
@@ -31,6 +32,6 @@ void checkTrianglesRange(Validator& v, const VkAccelerationStructureGeometryTria
 bool checkInstancesRange(Validator& v, const Device& dev, const VkAccelerationStructureGeometryInstancesDataKHR& inst,
                          const VkAccelerationStructureBuildRangeInfoKHR& r,
                          VkBuildAccelerationStructureFlagsKHR buildFlags, const char* where,
-                         std::vector<const AccelerationStructure*>& referenced);
+                         HostVector<const AccelerationStructure*>& referenced);
 
 }  // namespace vkas

@@ -1,3 +1,4 @@
+#include "engine/util/host_memory.hpp"
 #include "api/validate/micromap_build_infos.hpp"
 
 #include <algorithm>
@@ -94,7 +95,7 @@ void checkBuildMicromaps(Validator& v, const Device& dev, VkDeferredOperationKHR
         uint64_t size;
         uint32_t info;
     };
-    std::vector<Written> written;
+    HostVector<Written> written;
     for (uint32_t i = 0; i < infoCount; ++i) {
         const VkMicromapBuildInfoEXT& info = pInfos[i];
         char name[32];

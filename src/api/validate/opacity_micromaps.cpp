@@ -1,3 +1,4 @@
+#include "engine/util/host_memory.hpp"
 #include "api/validate/opacity_micromaps.hpp"
 
 #include <cstdio>
@@ -79,7 +80,7 @@ void checkOpacityMicromapStructure(Validator& v, const VkAccelerationStructureTr
 void checkOpacityMicromapRange(Validator& v, const Device& dev,
                                const VkAccelerationStructureTrianglesOpacityMicromapEXT& omm, uint32_t primitiveCount,
                                const char* where, uint32_t g) {
-    char name[80];
+    char name[128];
     std::snprintf(name, sizeof name, "%s geometry %u: the opacity micromap's micromap", where, g);
     const Micromap* micromap = nullptr;
     if (omm.micromap != VK_NULL_HANDLE) {
@@ -113,7 +114,7 @@ void checkOpacityMicromapRange(Validator& v, const Device& dev,
     // The (format, level) of each triangle after indirection, counted: "For a given format and subdivisionLevel the
     // number of triangles in this geometry matching those values after indirection and special index handling must
     // be equal to the sum of matching count provided."
-    std::map<std::pair<uint32_t, uint32_t>, uint64_t> used;
+    HostMap<std::pair<uint32_t, uint32_t>, uint64_t> used;
     for (uint32_t i = 0; i < primitiveCount; ++i) {
         const OpacityIndex index = opacityIndexOf(omm, i);
         if (index.special) continue;
@@ -134,7 +135,7 @@ void checkOpacityMicromapRange(Validator& v, const Device& dev,
             return;
         ++used[{tris[index.triangle].format, tris[index.triangle].subdivisionLevel}];
     }
-    std::map<std::pair<uint32_t, uint32_t>, uint64_t> declared;
+    HostMap<std::pair<uint32_t, uint32_t>, uint64_t> declared;
     forEachUsageCount(omm, [&](const VkMicromapUsageEXT& u) {
         if (u.count) declared[{u.format, u.subdivisionLevel}] += u.count;
     });

@@ -1,3 +1,4 @@
+#include "engine/util/host_memory.hpp"
 #include "engine/build/morton_builder.hpp"
 
 #include <immintrin.h>
@@ -310,15 +311,15 @@ BvhBuildResult buildMortonBvh(PrimRef* refs, uint32_t n, uint32_t maxLeafSize, N
     // The workspace: the keys and the sort's second buffer (16 bytes a primitive), then the sorted PrimRefs.
     uint64_t* keys = reinterpret_cast<uint64_t*>(workspace);
     uint64_t* other = keys + n;
-    std::vector<uint32_t> topCount(1u << kTopBits, 0);
+    HostVector<uint32_t> topCount(1u << kTopBits, 0);
     makeKeys(refs, 0, n, quant, layout, keys, topCount.data());
 
     // Scatter by the top digit into `other` (stable), then sort each bucket back into `keys`; the bucket's span of
     // `other` is its second buffer once its keys are counted.
-    std::vector<uint32_t> bucketBegin(topCount.size() + 1, 0);
+    HostVector<uint32_t> bucketBegin(topCount.size() + 1, 0);
     for (size_t d = 0; d < topCount.size(); ++d) bucketBegin[d + 1] = bucketBegin[d] + topCount[d];
     {
-        std::vector<uint32_t> offset(bucketBegin.begin(), bucketBegin.end() - 1);
+        HostVector<uint32_t> offset(bucketBegin.begin(), bucketBegin.end() - 1);
         for (uint32_t i = 0; i < n; ++i) other[offset[layout.topDigit(keys[i])]++] = keys[i];
     }
     for (size_t d = 0; d < topCount.size(); ++d) {

@@ -1,3 +1,4 @@
+#include "engine/util/host_memory.hpp"
 #include "engine/build/opacity_section_build.hpp"
 
 #include <cstring>
@@ -29,7 +30,7 @@ public:
         if (named && !micromap_) return kFailed;
         const uint32_t triangleCount = micromap_ ? micromapHeader(micromap_)->triangleCount : 0;
         // The data slot of each micromap triangle the geometry uses, in order of first use (UINT32_MAX: not yet).
-        std::vector<uint32_t> slot(triangleCount, UINT32_MAX);
+        HostVector<uint32_t> slot(triangleCount, UINT32_MAX);
         uint64_t dataSize = kSpecialStateBytes;
         if (base)
             for (uint32_t k = 0; k < kSpecialStateBytes; ++k) base[dataAt + k] = std::byte(k);

@@ -11,6 +11,7 @@
 #include <cstring>
 #include <vector>
 
+#include "engine/util/host_memory.hpp"
 #include "engine/build/refit.hpp"
 #include "engine/format/layout.hpp"
 #include "engine/format/sizes.hpp"
@@ -160,7 +161,7 @@ struct RecordKey {
 template <class Fn>
 void forEachLeaf(const std::byte* block, const Fn& fn) {
     const format::Header* h = format::header(block);
-    std::vector<ChildRef> leaves;
+    HostVector<ChildRef> leaves;
     if (isLeaf(h->root)) leaves.push_back(h->root);
     const Node* nodes = format::nodes(block);
     for (uint64_t k = 0; k < h->nodeCount; ++k)
@@ -179,9 +180,9 @@ template <class Probe>
 ActivityViolation checkActivity(const RefitJob& job, Probe& probe) {
     const format::Header* h = format::header(job.src);
     const auto& info = *job.info;
-    std::vector<uint64_t> base(info.geometryCount + 1, 0);
+    HostVector<uint64_t> base(info.geometryCount + 1, 0);
     for (uint32_t g = 0; g < info.geometryCount; ++g) base[g + 1] = base[g] + job.ranges[g].primitiveCount;
-    std::vector<uint64_t> stored((base[info.geometryCount] + 63) / 64, 0);
+    HostVector<uint64_t> stored((base[info.geometryCount] + 63) / 64, 0);
     ActivityViolation found{};
     bool stop = false;
     auto visitKey = [&](const RecordKey& key) {

@@ -1,3 +1,4 @@
+#include "engine/util/host_memory.hpp"
 #include "engine/build/sah_builder.hpp"
 
 #include <vulkan/vulkan_core.h>
@@ -44,7 +45,7 @@ public:
         : refs_(refs), settings_(s), nodes_(nodes), parallel_(parallel) {}
     // Appends the nodes to `nodes` (a part of a parallel build: its node count is known only at the end, and a
     // worst-case array would cost more to allocate and clear than building the part).
-    WideBuilder(PrimRef* refs, const BvhBuildSettings& s, std::vector<Node>* nodes, const ParallelFor* parallel = nullptr)
+    WideBuilder(PrimRef* refs, const BvhBuildSettings& s, HostVector<Node>* nodes, const ParallelFor* parallel = nullptr)
         : refs_(refs), settings_(s), nodes_(nullptr), growing_(nodes), parallel_(parallel) {}
 
     // With a deferral threshold, ranges of at most that many primitives (but more than a leaf) are not built:
@@ -52,7 +53,7 @@ public:
     void deferRangesUpTo(uint32_t threshold) { deferThreshold_ = threshold; }
     // Gives large ranges a buffer of as many refs as the build has (see stablePartition).
     void useSpare(PrimRef* spare) { spare_ = spare; }
-    const std::vector<Range>& deferred() const { return deferred_; }
+    const HostVector<Range>& deferred() const { return deferred_; }
     static constexpr uint64_t kDeferredKind = 3;  // a ChildRef kind the format never uses
     static ChildRef deferredRef(uint64_t k) { return (kDeferredKind << format::kKindShift) | k; }
     static bool isDeferred(ChildRef r) { return (r >> format::kKindShift) == kDeferredKind; }
@@ -161,7 +162,7 @@ private:
             return;
         }
         const uint32_t chunks = (r.count() + kChunk - 1) / kChunk;
-        std::vector<Acc> partial(chunks, empty);
+        HostVector<Acc> partial(chunks, empty);
         parallelFor(parallel_, chunks, [&](uint32_t c) {
             fn(r.begin + c * kChunk, std::min(r.end, r.begin + (c + 1) * kChunk), partial[c]);
         });
@@ -333,7 +334,7 @@ private:
             uint32_t leftCount = 0, leftAt = 0, rightAt = 0;
             RangeBounds lb, rb;
         };
-        std::vector<Side> sides(chunks);
+        HostVector<Side> sides(chunks);
         auto chunkBegin = [&](uint32_t c) { return r.begin + c * kPartitionChunk; };
         auto chunkEnd = [&](uint32_t c) { return std::min(r.end, r.begin + (c + 1) * kPartitionChunk); };
         runChunks(chunks, [&](uint32_t c) {
@@ -380,19 +381,19 @@ private:
     PrimRef* spare_ = nullptr;  // as many as refs_: the buffer of stablePartition
     BvhBuildSettings settings_;
     Node* nodes_;
-    std::vector<Node>* growing_ = nullptr;
+    HostVector<Node>* growing_ = nullptr;
     const ParallelFor* parallel_;  // for binning and bounds of large ranges
     uint32_t nodeCount_ = 0;
     uint32_t deferThreshold_ = 0;
-    std::vector<Range> deferred_;
+    HostVector<Range> deferred_;
 };
 
 // A part of a parallel build: its own nodes in pre-order from local index 0 (placeholders, WideBuilder::deferredRef(k),
 // stand for parts[k]), its root reference, and how many nodes it holds with its parts.
 struct Subtree {
     ChildRef root = format::kEmptyRef;
-    std::vector<Node> nodes;
-    std::vector<Subtree> parts;
+    HostVector<Node> nodes;
+    HostVector<Subtree> parts;
     uint64_t totalNodes = 0;
 };
 
@@ -415,7 +416,7 @@ void buildSubtree(PrimRef* refs, PrimRef* spare, const Range& r, const BvhBuildS
     topBuilder.useSpare(spare);
     topBuilder.deferRangesUpTo(std::max(kParallelGrain, r.count() / 2));
     out.root = topBuilder.build(r);
-    const std::vector<Range>& ranges = topBuilder.deferred();
+    const HostVector<Range>& ranges = topBuilder.deferred();
     out.parts.resize(ranges.size());
     parallelFor(&parallel, uint32_t(ranges.size()),
              [&](uint32_t k) { buildSubtree(refs, spare, ranges[k], settings, parallel, out.parts[k]); });
@@ -442,7 +443,7 @@ private:
     struct Placement {
         const Subtree& sub;
         uint32_t next;                                    // the next free node index
-        std::vector<std::pair<uint32_t, uint32_t>> parts;  // (part, base) to place afterwards
+        HostVector<std::pair<uint32_t, uint32_t>> parts;  // (part, base) to place afterwards
     };
 
     ChildRef placeNode(Placement& p, ChildRef ref) {
@@ -475,7 +476,7 @@ Range rootRange(const PrimRef* refs, uint32_t n, const ParallelFor* parallel) {
     all.begin = 0, all.end = n;
     constexpr uint32_t kBoundsChunk = 65536;
     const uint32_t chunks = (n + kBoundsChunk - 1) / kBoundsChunk;
-    std::vector<SimdBoxNanSpreads> bounds(chunks);
+    HostVector<SimdBoxNanSpreads> bounds(chunks);
     auto boundChunk = [&](uint32_t c) {
         SimdBoxNanSpreads b;
         for (uint32_t i = c * kBoundsChunk, end = std::min(n, (c + 1) * kBoundsChunk); i < end; ++i)
@@ -501,7 +502,7 @@ uint32_t buildBinarySahTree(PrimRef* refs, uint32_t n, const BvhBuildSettings& s
         Range range;
         uint32_t index;
     };
-    std::vector<Pending> stack;
+    HostVector<Pending> stack;
     stack.push_back({rootRange(refs, n, parallel), 0});
     out[0].parent = BinaryNode::kNone;
     uint32_t count = 1;

@@ -1,3 +1,4 @@
+#include "engine/util/host_memory.hpp"
 #include "engine/format/check.hpp"
 
 #include <cstring>
@@ -37,12 +38,12 @@ size_t geometryIndexOffset(uint32_t primitiveType) {
 struct TreeWalk {
     uint32_t nodeCount;
     uint64_t recordCount;
-    std::vector<uint8_t> visited;
-    std::vector<std::pair<uint32_t, uint32_t>> stack;  // node index, depth
+    HostVector<uint8_t> visited;
+    HostVector<std::pair<uint32_t, uint32_t>> stack;  // node index, depth
     uint64_t nodesSeen = 0;
     uint64_t recordsCovered = 0;
-    std::vector<ChildRef>* leaves = nullptr;  // format-2 triangles: every leaf, for the lane checks
-    std::vector<uint64_t> covered = std::vector<uint64_t>((recordCount + 63) / 64, 0);  // records named by a leaf
+    HostVector<ChildRef>* leaves = nullptr;  // format-2 triangles: every leaf, for the lane checks
+    HostVector<uint64_t> covered = HostVector<uint64_t>((recordCount + 63) / 64, 0);  // records named by a leaf
 
     const char* visit(ChildRef ref, uint32_t depth) {
         const uint64_t kind = ref >> kKindShift;
@@ -80,7 +81,7 @@ struct TreeWalk {
 
 // [EXT-OMM] The opacity-micromap section (opacity_section.hpp): every geometry block inside the section, one
 // primitive entry per primitive of its geometry, every entry's states inside its geometry's data. Sets hasBlock[g].
-const char* checkOpacitySection(const std::byte* block, const Header& h, std::vector<uint8_t>& hasBlock) {
+const char* checkOpacitySection(const std::byte* block, const Header& h, HostVector<uint8_t>& hasBlock) {
     hasBlock.assign(h.geometryCount, 0);
     if (h.opacityOffset == 0) return h.opacityReserved == 0 ? nullptr : "opacityReserved without an opacity section";
     if (h.type != uint32_t(StructureType::BottomLevel) || h.primitiveType != VK_GEOMETRY_TYPE_TRIANGLES_KHR)
@@ -167,19 +168,19 @@ CheckResult checkBlock(const std::byte* block, uint64_t size) {
             return corrupt("a geometry's type does not match the structure's primitive type");
     }
     if (format1 && (h.opacityOffset != 0 || h.opacityReserved != 0)) return corrupt("a format-1 block with micromaps");
-    std::vector<uint8_t> hasMicromaps;  // per geometry
+    HostVector<uint8_t> hasMicromaps;  // per geometry
     if (const char* why = checkOpacitySection(block, h, hasMicromaps)) return corrupt(why);
     // A triangle record that asks for its geometry's micromap must have one to read.
     auto micromapMissing = [&](uint32_t flags, uint32_t geometry) {
         return (flags & kTriangleMicromap) && !hasMicromaps[geometry];
     };
-    std::vector<ChildRef> leaves;
+    HostVector<ChildRef> leaves;
     // Tree: every node reached exactly once from the root, no deeper than the traversal stack allows, every leaf
     // inside the record array, the leaves covering recordCount records.
     if (h.root == kEmptyRef) {
         if (h.nodeCount != 0 || h.recordCount != 0) return corrupt("an empty root with nodes or records");
     } else {
-        TreeWalk walk{h.nodeCount, h.recordCount, std::vector<uint8_t>(h.nodeCount, 0), {}};
+        TreeWalk walk{h.nodeCount, h.recordCount, HostVector<uint8_t>(h.nodeCount, 0), {}};
         walk.leaves = triangleLeaves ? &leaves : nullptr;
         if (const char* why = walk.visit(h.root, 0)) return corrupt(why);
         while (!walk.stack.empty()) {

@@ -10,6 +10,7 @@
 #include <optional>
 #include <vector>
 
+#include "engine/util/host_memory.hpp"
 #include "engine/build/kinds/kind.hpp"
 #include "engine/build/refit_tree.hpp"
 #include "engine/input/build_inputs.hpp"
@@ -62,7 +63,7 @@ uint32_t gatherTriangles(const BuildJob& job, PrimRef* refs, std::byte* tempByte
         uint64_t base;  // build-wide number of the geometry's first triangle
     };
     constexpr uint32_t kChunk = 16384;
-    std::vector<Chunk> chunks;
+    HostVector<Chunk> chunks;
     uint64_t base = 0;
     for (uint32_t g = 0; g < info.geometryCount; ++g) {
         const uint32_t count = job.ranges[g].primitiveCount;
@@ -140,7 +141,7 @@ uint32_t gatherTriangles(const BuildJob& job, PrimRef* refs, std::byte* tempByte
     parallelFor(job.parallel, uint32_t(chunks.size()), fetchChunk);
     // Pack the refs of the kept triangles in order. The leading chunks whose triangles were all kept (usually all of
     // them) stay in place and only clear their flags, in parallel; the rest is packed serially.
-    std::vector<uint8_t> whole(chunks.size());
+    HostVector<uint8_t> whole(chunks.size());
     auto checkChunk = [&](uint32_t c) {
         const Chunk& ch = chunks[c];
         bool all = true;
