@@ -98,7 +98,7 @@ void checkGeometryInfo(Validator& v, const VkAccelerationStructureBuildGeometryI
                 int(geom->sType));
         if (geom->geometryType != VK_GEOMETRY_TYPE_SPHERES_NV &&
             geom->geometryType != VK_GEOMETRY_TYPE_LINEAR_SWEPT_SPHERES_NV) {
-            char name[48];
+            char name[72];
             std::snprintf(name, sizeof name, "%s geometry %u", where, g);
             checkNextChain(v, geom->pNext,
                            {VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_GEOMETRY_SPHERES_DATA_NV,
@@ -134,7 +134,7 @@ void checkGeometryInfo(Validator& v, const VkAccelerationStructureBuildGeometryI
                     "VUID-VkAccelerationStructureGeometryTrianglesDataKHR-sType-sType",
                     "%s geometry %u: triangles.sType is %d.", where, g, int(t.sType));
             {
-                char name[48];
+                char name[72];
                 std::snprintf(name, sizeof name, "%s geometry %u: triangles", where, g);
                 checkNextChain(v, t.pNext,
                                {VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_GEOMETRY_MOTION_TRIANGLES_DATA_NV,

@@ -1,10 +1,12 @@
 #include "api/validate/validator.hpp"
 
+#include <algorithm>
 #include <cstdarg>
 #include <cstdio>
 #include <string>
 
 #include "api/device.hpp"
+#include "engine/util/host_memory.hpp"
 
 namespace vkas {
 
@@ -22,16 +24,43 @@ Validator::Validator(const Device* device, const char* command)
 
 void Validator::fail(const char* vuid, const char* format, ...) {
     ++failures_;
-    char detail[1024];
+    // The whole message, never truncated: on the stack when it fits (most do; reporting then allocates nothing),
+    // otherwise in the command's host memory (engine/util/host_memory.hpp: the application's allocator, scope
+    // COMMAND). Out of memory for a long message: written to stderr in pieces when there is no messenger (that
+    // needs no buffer), otherwise std::bad_alloc (the command returns VK_ERROR_OUT_OF_HOST_MEMORY).
+    static constexpr const char* kPrefix = "Validation Error: [ %s ] | %s(): ";
+    PFN_vkDebugUtilsMessengerCallbackEXT callback = device_ ? device_->createInfo().pfnMessenger : nullptr;
     va_list args;
     va_start(args, format);
-    std::vsnprintf(detail, sizeof detail, format, args);
+    va_list measure;
+    va_copy(measure, args);
+    const int detailLength = std::vsnprintf(nullptr, 0, format, measure);
+    va_end(measure);
+    const int prefixLength = std::snprintf(nullptr, 0, kPrefix, vuid, command_);
+    const size_t length = size_t(std::max(prefixLength, 0)) + size_t(std::max(detailLength, 0));
+    char local[1536];
+    HostVector<char> heap;
+    char* message = local;
+    if (length + 1 > sizeof local) {
+        try {
+            heap.resize(length + 1);
+        } catch (...) {
+            if (callback) {
+                va_end(args);
+                throw;
+            }
+            std::fprintf(stderr, kPrefix, vuid, command_);
+            std::vfprintf(stderr, format, args);
+            std::fputc('\n', stderr);
+            va_end(args);
+            return;
+        }
+        message = heap.data();
+    }
+    std::snprintf(message, length + 1, kPrefix, vuid, command_);
+    std::vsnprintf(message + std::max(prefixLength, 0), length + 1 - size_t(std::max(prefixLength, 0)), format, args);
     va_end(args);
-    // A fixed buffer: reporting allocates nothing, so it works out of memory and in functions that cannot fail.
-    char message[1536];
-    std::snprintf(message, sizeof message, "Validation Error: [ %s ] | %s(): %s", vuid, command_, detail);
 
-    PFN_vkDebugUtilsMessengerCallbackEXT callback = device_ ? device_->createInfo().pfnMessenger : nullptr;
     if (!callback) {
         std::fprintf(stderr, "%s\n", message);
         return;
