@@ -44,6 +44,13 @@ typedef struct VkasDeviceCreateInfo {
 } VkasDeviceCreateInfo;
 
 VKAS_API VkResult vkasCreateDevice(const VkasDeviceCreateInfo* pCreateInfo /* may be NULL */, VkDevice* pDevice);
+/* vkasCreateDevice with the application's allocator: the device's own memory comes from pAllocator with
+   VK_SYSTEM_ALLOCATION_SCOPE_DEVICE, and every command of the device that has no pAllocator of its own allocates its
+   temporaries from it with VK_SYSTEM_ALLOCATION_SCOPE_COMMAND (docs/API.md, "Host memory"). pAllocator may be NULL
+   (the same as vkasCreateDevice); its pfnReallocation is never called. vkDestroyDevice must then be given compatible
+   callbacks (vkasDestroyDevice needs none). */
+VKAS_API VkResult vkasCreateDeviceWithAllocator(const VkasDeviceCreateInfo* pCreateInfo /* may be NULL */,
+                                                const VkAllocationCallbacks* pAllocator, VkDevice* pDevice);
 VKAS_API void vkasDestroyDevice(VkDevice device);
 /* The implementation of the Vulkan command named pName, or NULL when vkas does not implement it. */
 VKAS_API PFN_vkVoidFunction vkasGetDeviceProcAddr(VkDevice device, const char* pName);

@@ -132,9 +132,10 @@ VkResult traceBatch(VkDevice device, VkAccelerationStructureKHR topLevel, VkasTr
         // Without an intersection callback the batch kernel traces the rays, coherent closest-hit rays as packets;
         // a ray it does not cover (motion, spheres, LSS) and every ray of vkasTraceRaysProcedural run as ray
         // queries. All give the same hits.
-        std::unique_ptr<vkas::PacketScratch> scratch;  // 11 KiB and more: kept off small worker stacks
-        std::unique_ptr<vkas::RayQueryState> q;
-        if (!intersect) scratch = std::make_unique_for_overwrite<vkas::PacketScratch>();
+        // 11 KiB and more: kept off small worker stacks, in the command's host memory (the pool's workers run with it).
+        vkas::HostUnique<vkas::PacketScratch> scratch;
+        vkas::HostUnique<vkas::RayQueryState> q;
+        if (!intersect) scratch = vkas::makeHostUniqueForOverwrite<vkas::PacketScratch>();
         const uint64_t first = task * kRaysPerTask;
         const uint32_t n = uint32_t(std::min<uint64_t>(rayCount, first + kRaysPerTask) - first);
         vkas::KernelRay rays[kRaysPerTask];
@@ -151,7 +152,7 @@ VkResult traceBatch(VkDevice device, VkAccelerationStructureKHR topLevel, VkasTr
                 return;
             }
             const VkasRay& r = pRays[i];
-            if (!q) q = std::make_unique<vkas::RayQueryState>();
+            if (!q) q = vkas::makeHostUnique<vkas::RayQueryState>();
             vkas::queryInitialize(*q, block, vkas::resolveAccelerationStructure, flags, cullMask, r.origin, r.tMin,
                                   r.direction, r.tMax);
             runQuery(*q, uint32_t(i), intersect, userData);
@@ -201,6 +202,7 @@ VkResult traceBatch(VkDevice device, VkAccelerationStructureKHR topLevel, VkasTr
 extern "C" VKAS_API VkResult vkasTraceRays(VkDevice device, VkAccelerationStructureKHR topLevel, VkasTraceMode mode,
                                            uint32_t rayFlags, uint32_t cullMask, uint32_t rayCount,
                                            const VkasRay* pRays, VkasHit* pHits) {
+    vkas::CommandHostMemory<VkDevice> memory(device);
     return vkas::guarded([&] {
         return traceBatch(device, topLevel, mode, rayFlags, cullMask, rayCount, pRays, pHits, nullptr, nullptr,
                           kTraceRaysVuids);
@@ -211,6 +213,7 @@ extern "C" VKAS_API VkResult vkasTraceRaysProcedural(VkDevice device, VkAccelera
                                                      VkasTraceMode mode, uint32_t rayFlags, uint32_t cullMask,
                                                      uint32_t rayCount, const VkasRay* pRays, VkasHit* pHits,
                                                      PFN_vkasIntersectAabb pfnIntersect, void* pUserData) {
+    vkas::CommandHostMemory<VkDevice> memory(device);
     return vkas::guarded([&] {
         return traceBatch(device, topLevel, mode, rayFlags, cullMask, rayCount, pRays, pHits, pfnIntersect,
                           pUserData, kTraceRaysProceduralVuids);

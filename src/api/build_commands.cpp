@@ -56,16 +56,19 @@ VKAPI_ATTR VkResult VKAPI_CALL BuildAccelerationStructuresKHR(
     if (deferredOperation != VK_NULL_HANDLE) {
         // Nothing runs now: each info becomes a task of the operation, run by the threads that join it.
         auto* op = fromHandle<DeferredOperation>(deferredOperation);
-        auto results = std::make_shared<std::vector<VkResult>>(infoCount, VK_SUCCESS);
-        std::vector<DeferredOperation::Task> tasks;
+        ScopedHostMemory memory(op->stateMemory());  // the captured work lasts while the operation is pending
+        HostVector<VkResult> results(infoCount, VK_SUCCESS);
+        VkResult* out = results.data();  // stays where it is when `results` moves into the finishing step
+        HostVector<DeferredOperation::Task> tasks;
+        tasks.reserve(infoCount);
         uint64_t primitives = 0;
         for (uint32_t i = 0; i < infoCount; ++i) {
-            tasks.push_back([=] { (*results)[i] = runInfo(i, &op->parallelFor()); });
+            tasks.emplace_back([=] { out[i] = runInfo(i, &op->parallelFor()); });
             for (uint32_t g = 0; g < pInfos[i].geometryCount; ++g) primitives += ppBuildRangeInfos[i][g].primitiveCount;
         }
         const uint32_t hint = uint32_t(std::min<uint64_t>(infoCount + primitives / 4096, 256));
-        op->start(std::move(tasks), [results] {
-            for (VkResult r : *results)
+        op->start(std::move(tasks), [results = std::move(results)] {
+            for (VkResult r : results)
                 if (r != VK_SUCCESS) return r;
             return VK_SUCCESS;
         }, hint);

@@ -1,6 +1,7 @@
 // vkCopyAccelerationStructureKHR (CLONE, COMPACT), vkCopyAccelerationStructureToMemoryKHR (SERIALIZE) and
 // vkCopyMemoryToAccelerationStructureKHR (DESERIALIZE): valid-usage checks first (api/validate/copy_infos.hpp;
 // nothing is written when one fails), then the work functions of copy_commands.hpp on plain memory.
+#include "engine/util/host_memory.hpp"
 #include "api/copy_commands.hpp"
 
 #include "api/deferred_operation.hpp"
@@ -134,7 +135,7 @@ VkResult deserializeAccelerationStructure(const Device& device, const void* src,
         return VK_ERROR_UNKNOWN;
     }
     // Every non-zero handle-array entry must name a bottom level before anything is copied.
-    std::vector<uint64_t> referenceOfSlot;
+    HostVector<uint64_t> referenceOfSlot;
     try {
         referenceOfSlot.resize(view.handleCount);
         SerializedReferences references(device, view.layout);

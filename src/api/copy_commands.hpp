@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <unordered_map>
 
+#include "engine/util/host_memory.hpp"
 #include "api/device.hpp"
 #include "api/objects.hpp"
 #include "engine/format/serialize.hpp"
@@ -49,7 +50,7 @@ private:
     const Device& device_;
     serial::Layout layout_;
     bool indexed_ = false;
-    std::unordered_map<uint64_t, const AccelerationStructure*> byAddress_;
+    HostUnorderedMap<uint64_t, const AccelerationStructure*> byAddress_;
 };
 
 // vkCopyMemoryToAccelerationStructureKHR (DESERIALIZE): checks the blob at `src` and loads it into `dst`, mapping

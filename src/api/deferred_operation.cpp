@@ -14,85 +14,94 @@
 namespace vkas {
 
 DeferredOperation::DeferredOperation() {
-    parallelFor_ = [this](uint32_t count, const std::function<void(uint32_t)>& fn) {
-        if (count == 0) return;
-        // A call that throws (out of memory), or queueing that fails, is recorded and rethrown here, on the calling
-        // thread, once every queued call has finished: nothing queued is left referring to fn.
-        struct Batch {
-            uint32_t left;
-            std::exception_ptr error;
-        };
-        auto batch = std::make_shared<Batch>(Batch{count, nullptr});
-        std::unique_lock<std::mutex> lock(mutex_);
-        for (uint32_t i = 0; i < count; ++i) {
-            try {
-                queue_.push_back([this, i, &fn, batch] {
-                    std::exception_ptr error;
-                    try {
-                        fn(i);
-                    } catch (...) {
-                        error = std::current_exception();
-                    }
-                    std::lock_guard<std::mutex> guard(mutex_);
-                    if (error && !batch->error) batch->error = error;
-                    if (--batch->left == 0) changed_.notify_all();
-                });
-            } catch (...) {
-                batch->left -= count - i;  // never queued: they will not run
-                if (!batch->error) batch->error = std::current_exception();
-                break;
-            }
-        }
-        changed_.notify_all();
-        // Help: run queued tasks (ours or others') until all of ours have run.
-        while (batch->left > 0) {
-            if (!queue_.empty())
-                runOne(lock);
-            else
-                changed_.wait(lock);
-        }
-        if (batch->error) {
-            std::exception_ptr error = batch->error;
-            lock.unlock();
-            std::rethrow_exception(error);
-        }
-    };
+    parallelFor_ = [this](uint32_t count, FunctionRef<void(uint32_t)> fn) { spread(count, fn); };
 }
 
-void DeferredOperation::start(std::vector<Task> tasks, std::function<VkResult()> finish, uint32_t concurrencyHint) {
+void DeferredOperation::setHostMemory(const VkAllocationCallbacks& callbacks) {
+    state_ = CallbacksResource(callbacks, VK_SYSTEM_ALLOCATION_SCOPE_OBJECT);
+    work_ = CallbacksResource(callbacks, VK_SYSTEM_ALLOCATION_SCOPE_COMMAND);
+    tasks_ = HostVector<Task>(HostAllocator<Task>(stateMemory()));
+    queue_ = HostVector<Item>(HostAllocator<Item>(stateMemory()));
+}
+
+void DeferredOperation::spread(uint32_t count, FunctionRef<void(uint32_t)> fn) {
+    if (count == 0) return;
+    // A call that throws (out of memory), or queueing that fails, is recorded and rethrown here, on the calling
+    // thread, once every queued call has finished: nothing queued is left referring to the batch (on this stack).
+    Batch batch{fn, count, nullptr};
+    std::unique_lock<std::mutex> lock(mutex_);
+    try {
+        queue_.reserve(queue_.size() + count);
+        for (uint32_t i = 0; i < count; ++i) queue_.push_back(Item{&batch, i});
+    } catch (...) {
+        batch.left = 0;  // nothing queued: the reserve failed before any push
+        batch.error = std::current_exception();
+    }
+    changed_.notify_all();
+    // Help: run queued items (ours or others') until all of ours have run.
+    while (batch.left > 0) {
+        if (!queueEmpty())
+            runOne(lock);
+        else
+            changed_.wait(lock);
+    }
+    if (batch.error) {
+        std::exception_ptr error = batch.error;
+        lock.unlock();
+        std::rethrow_exception(error);
+    }
+}
+
+void DeferredOperation::start(HostVector<Task> tasks, Finish finish, uint32_t concurrencyHint) {
     // Everything that allocates comes first: a start that throws (out of memory) leaves the operation as it was.
     // A task that throws makes the operation's result VK_ERROR_OUT_OF_HOST_MEMORY (currentExceptionResult).
-    std::deque<Task> queue;
-    for (Task& t : tasks)
-        queue.push_back([this, t = std::move(t)] {
-            VkResult failure = VK_SUCCESS;
-            try {
-                t();
-            } catch (...) {
-                failure = currentExceptionResult();
-            }
-            std::lock_guard<std::mutex> guard(mutex_);
-            if (failure != VK_SUCCESS && failure_ == VK_SUCCESS) failure_ = failure;
-            --topLevelLeft_;
-        });
     std::lock_guard<std::mutex> lock(mutex_);
+    queue_.clear();  // the operation was complete: nothing is queued
+    head_ = 0;
+    queue_.reserve(tasks.size());
+    for (uint32_t i = 0; i < tasks.size(); ++i) queue_.push_back(Item{nullptr, i});
+    tasks_ = std::move(tasks);
     pending_ = true;
     finishing_ = false;
     result_ = VK_NOT_READY;
     failure_ = VK_SUCCESS;
     finish_ = std::move(finish);
     concurrencyHint_ = std::max(1u, concurrencyHint);
-    topLevelLeft_ = uint32_t(queue.size());
-    queue_.swap(queue);  // queue_ is empty: the operation was complete
+    topLevelLeft_ = uint32_t(tasks_.size());
 }
 
 void DeferredOperation::runOne(std::unique_lock<std::mutex>& lock) {
-    Task task = std::move(queue_.front());
-    queue_.pop_front();
+    const Item item = queue_[head_++];
+    if (queueEmpty()) {
+        queue_.clear();
+        head_ = 0;
+    }
     ++running_;
     lock.unlock();
-    task();
+    std::exception_ptr error;
+    VkResult failure = VK_SUCCESS;
+    {
+        ScopedHostMemory memory(workMemory());  // the engine's temporaries while this thread works for the operation
+        try {
+            if (item.batch)
+                item.batch->fn(item.index);
+            else
+                tasks_[item.index]();
+        } catch (...) {
+            if (item.batch)
+                error = std::current_exception();
+            else
+                failure = currentExceptionResult();
+        }
+    }
     lock.lock();
+    if (item.batch) {
+        if (error && !item.batch->error) item.batch->error = error;
+        --item.batch->left;
+    } else {
+        if (failure != VK_SUCCESS && failure_ == VK_SUCCESS) failure_ = failure;
+        --topLevelLeft_;
+    }
     --running_;
     changed_.notify_all();
 }
@@ -102,7 +111,7 @@ VkResult DeferredOperation::join() {
     bool waited = false;
     for (;;) {
         if (!pending_) return VK_SUCCESS;
-        if (!queue_.empty()) {
+        if (!queueEmpty()) {
             runOne(lock);
             continue;
         }
@@ -112,6 +121,7 @@ VkResult DeferredOperation::join() {
             lock.unlock();
             VkResult r;
             try {
+                ScopedHostMemory memory(workMemory());
                 r = finish_ ? finish_() : VK_SUCCESS;
             } catch (...) {
                 r = currentExceptionResult();
@@ -120,6 +130,7 @@ VkResult DeferredOperation::join() {
             result_ = failure_ != VK_SUCCESS ? failure_ : r;
             pending_ = false;
             finish_ = nullptr;
+            tasks_.clear();  // the command's captured work, freed (the list keeps its capacity)
             changed_.notify_all();
             return VK_SUCCESS;
         }
@@ -129,7 +140,7 @@ VkResult DeferredOperation::join() {
         if (topLevelLeft_ > 0 && !waited) {
             waited = true;
             changed_.wait_for(lock, std::chrono::milliseconds(1), [this] {
-                return !pending_ || !queue_.empty() || (running_ == 0 && topLevelLeft_ == 0);
+                return !pending_ || !queueEmpty() || (running_ == 0 && topLevelLeft_ == 0);
             });
             continue;
         }
@@ -140,7 +151,7 @@ VkResult DeferredOperation::join() {
 uint32_t DeferredOperation::maxConcurrency() {
     std::lock_guard<std::mutex> lock(mutex_);
     if (!pending_) return 0;
-    return std::max({1u, concurrencyHint_, uint32_t(queue_.size()) + running_});
+    return std::max({1u, concurrencyHint_, uint32_t(queue_.size() - head_) + running_});
 }
 
 VkResult DeferredOperation::result() {
@@ -151,14 +162,6 @@ VkResult DeferredOperation::result() {
 bool DeferredOperation::pending() {
     std::lock_guard<std::mutex> lock(mutex_);
     return pending_;
-}
-
-VkResult runOrDefer(VkDeferredOperationKHR operation, std::function<VkResult()> work) {
-    if (operation == VK_NULL_HANDLE) return work();
-    auto result = std::make_shared<VkResult>(VK_SUCCESS);
-    fromHandle<DeferredOperation>(operation)->start({[result, work = std::move(work)] { *result = work(); }},
-                                                    [result] { return *result; }, 1);
-    return VK_OPERATION_DEFERRED_KHR;
 }
 
 }  // namespace vkas
@@ -189,6 +192,7 @@ VKAPI_ATTR VkResult VKAPI_CALL CreateDeferredOperationKHR(VkDevice device, const
     auto* op = createObject<DeferredOperation>(pAllocator);
     if (!op) return VK_ERROR_OUT_OF_HOST_MEMORY;
     op->device = dev;
+    op->setHostMemory(hasCallbacks(op->allocator) ? op->allocator : dev->allocator());
     if (!dev->track(op)) {
         destroyObject(op);
         return VK_ERROR_OUT_OF_HOST_MEMORY;

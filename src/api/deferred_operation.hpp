@@ -2,33 +2,48 @@
 // (VK_KHR_deferred_host_operations). The work is a list of tasks plus a finishing step; a task may spread work over
 // the joined threads through parallelFor(), and the thread that waits there helps run it, so a lone joined thread
 // always completes the operation.
+//
+// Host memory: the operation's state (its task list, queue, the deferred command's captured work and results) comes
+// from the operation's VkAllocationCallbacks, else the device's, with scope OBJECT (it lasts while the operation is
+// pending, across commands); what the tasks allocate while a joined thread runs them, from the same callbacks with
+// scope COMMAND (it is freed before that vkDeferredOperationJoinKHR returns).
 #pragma once
 
 #include <vulkan/vulkan_core.h>
 
 #include <condition_variable>
-#include <deque>
-#include <functional>
+#include <exception>
+#include <memory_resource>
 #include <mutex>
-#include <vector>
 
+#include "api/host_allocator.hpp"
 #include "api/objects.hpp"
+#include "engine/util/function_ref.hpp"
+#include "engine/util/host_memory.hpp"
 #include "engine/util/parallel_for.hpp"
 
 namespace vkas {
 
 class DeferredOperation {
 public:
-    using Task = std::function<void()>;
+    using Task = HostFunction<void()>;
+    using Finish = HostFunction<VkResult()>;
 
     ObjectMagic magic = ObjectMagic::DeferredOperation;
     Device* device = nullptr;
     VkAllocationCallbacks allocator{};  // the pAllocator of vkCreateDeferredOperationKHR (zero: none)
 
+    // The callbacks the operation allocates through (its own, else the device's; zeroed: operator new). Called once,
+    // at creation, before anything is queued.
+    void setHostMemory(const VkAllocationCallbacks& callbacks);
+    std::pmr::memory_resource* stateMemory() { return state_.orElse(std::pmr::new_delete_resource()); }
+    std::pmr::memory_resource* workMemory() { return work_.orElse(std::pmr::new_delete_resource()); }
+
     // Makes the operation pending: nothing runs until a thread joins. `finish` runs once, after every task (and
     // everything they spread), on the thread that completes the operation; its result becomes the operation's.
-    // `concurrencyHint` is how many threads the work can use, for vkGetDeferredOperationMaxConcurrencyKHR.
-    void start(std::vector<Task> tasks, std::function<VkResult()> finish, uint32_t concurrencyHint);
+    // `concurrencyHint` is how many threads the work can use, for vkGetDeferredOperationMaxConcurrencyKHR. The
+    // tasks and finish must have been made with stateMemory() current. Throws (out of memory) before any change.
+    void start(HostVector<Task> tasks, Finish finish, uint32_t concurrencyHint);
 
     VkResult join();               // VK_SUCCESS, VK_THREAD_DONE_KHR or VK_THREAD_IDLE_KHR
     uint32_t maxConcurrency();     // 0 once complete
@@ -39,20 +54,37 @@ public:
     const ParallelFor& parallelFor() const { return parallelFor_; }
 
 private:
-    // Runs one queued task with the lock released. Returns with the lock held.
+    // What parallelFor spreads: fn(0..left) for one caller, which waits on its own stack until all ran.
+    struct Batch {
+        FunctionRef<void(uint32_t)> fn;
+        uint32_t left;
+        std::exception_ptr error;
+    };
+    // A queued piece of work: task `index` of start() (batch == nullptr) or fn(index) of a batch.
+    struct Item {
+        Batch* batch;
+        uint32_t index;
+    };
+
+    void spread(uint32_t count, FunctionRef<void(uint32_t)> fn);
+    bool queueEmpty() const { return head_ == queue_.size(); }
+    // Runs one queued item with the lock released. Returns with the lock held.
     void runOne(std::unique_lock<std::mutex>& lock);
 
+    CallbacksResource state_, work_;
     std::mutex mutex_;
     std::condition_variable changed_;
-    std::deque<Task> queue_;
-    uint32_t running_ = 0;       // tasks being run right now
+    HostVector<Task> tasks_;
+    HostVector<Item> queue_;  // items before head_ have been handed out; emptied (capacity kept) when all were
+    size_t head_ = 0;
+    uint32_t running_ = 0;       // items being run right now
     uint32_t topLevelLeft_ = 0;  // tasks given to start() not finished yet: they may still spread work
     bool pending_ = false;
     bool finishing_ = false;
     uint32_t concurrencyHint_ = 1;
     VkResult result_ = VK_SUCCESS;  // a new operation is complete with VK_SUCCESS
     VkResult failure_ = VK_SUCCESS;  // a task that threw (out of memory): the operation's result instead of finish's
-    std::function<VkResult()> finish_;
+    Finish finish_;
     ParallelFor parallelFor_;
 
 public:
@@ -61,6 +93,17 @@ public:
 
 // Runs `work` now when operation is VK_NULL_HANDLE and returns its result; otherwise makes it the operation's one
 // task (its result becomes the operation's) and returns VK_OPERATION_DEFERRED_KHR.
-VkResult runOrDefer(VkDeferredOperationKHR operation, std::function<VkResult()> work);
+template <class Work>
+VkResult runOrDefer(VkDeferredOperationKHR operation, Work&& work) {
+    if (operation == VK_NULL_HANDLE) return work();
+    auto* op = fromHandle<DeferredOperation>(operation);
+    ScopedHostMemory memory(op->stateMemory());
+    HostVector<VkResult> result(1, VK_SUCCESS);
+    VkResult* out = result.data();  // stays where it is when `result` moves into the finishing step
+    HostVector<DeferredOperation::Task> tasks;
+    tasks.emplace_back([out, work = std::forward<Work>(work)] { *out = work(); });
+    op->start(std::move(tasks), [result = std::move(result)] { return result[0]; }, 1);
+    return VK_OPERATION_DEFERRED_KHR;
+}
 
 }  // namespace vkas

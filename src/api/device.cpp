@@ -30,7 +30,13 @@ std::unordered_map<const void*, Device*>& registry() {
 }
 }  // namespace
 
-Device::Device(const VkasDeviceCreateInfo& info) : info_(info) {
+Device::Device(const VkasDeviceCreateInfo& info, const VkAllocationCallbacks& allocator)
+    : info_(info),
+      allocator_(allocator),
+      command_(allocator, VK_SYSTEM_ALLOCATION_SCOPE_COMMAND),
+      object_(allocator, VK_SYSTEM_ALLOCATION_SCOPE_OBJECT),
+      device_(allocator, VK_SYSTEM_ALLOCATION_SCOPE_DEVICE),
+      objects_(HostAllocator<const void*>(deviceMemory())) {
     std::unique_lock lock(gRegistryMutex);
     registry().emplace(this, this);
     gRegistryGeneration.fetch_add(1, std::memory_order_release);
@@ -64,7 +70,8 @@ ThreadPool& Device::workers() {
     if (!workers_) {
         uint32_t n = info_.workerThreadCount;
         if (n == 0) n = std::max(1u, std::thread::hardware_concurrency());
-        workers_ = std::make_unique<ThreadPool>(n);
+        ScopedHostMemory scope(deviceMemory());  // the pool and its thread list live as long as the device
+        workers_ = makeHostUnique<ThreadPool>(n);
     }
     return *workers_;
 }
@@ -105,8 +112,8 @@ bool Device::isLive(const void* object) const {
     return objects_.count(object) != 0;
 }
 
-std::unordered_map<uint64_t, const AccelerationStructure*> Device::bottomLevelsByAddress() const {
-    std::unordered_map<uint64_t, const AccelerationStructure*> byAddress;
+HostUnorderedMap<uint64_t, const AccelerationStructure*> Device::bottomLevelsByAddress() const {
+    HostUnorderedMap<uint64_t, const AccelerationStructure*> byAddress;
     std::lock_guard lock(mutex_);
     for (const void* o : objects_) {
         if (*static_cast<const ObjectMagic*>(o) != ObjectMagic::AccelerationStructure) continue;
@@ -155,6 +162,11 @@ size_t Device::releaseAll() {
     return n;
 }
 
+std::pmr::memory_resource* deviceCommandMemory(VkDevice device) noexcept {
+    Device* dev = Device::fromHandle(device);
+    return dev ? dev->commandMemory() : nullptr;
+}
+
 const std::byte* resolveAccelerationStructure(uint64_t reference) {
     auto* as = reinterpret_cast<const AccelerationStructure*>(reference);
     if (!as || as->magic != ObjectMagic::AccelerationStructure) return nullptr;
@@ -167,28 +179,54 @@ const std::byte* resolveAccelerationStructure(uint64_t reference) {
 
 using vkas::Device;
 
-extern "C" VKAS_API VkResult vkasCreateDevice(const VkasDeviceCreateInfo* pCreateInfo, VkDevice* pDevice) {
-    return vkas::guarded([&] {
+namespace {
+VkResult createDevice(const VkasDeviceCreateInfo* pCreateInfo, const VkAllocationCallbacks* pAllocator,
+                      VkDevice* pDevice) {
     if (!pDevice) return VK_ERROR_INITIALIZATION_FAILED;
     VkasDeviceCreateInfo info{};
     if (pCreateInfo) info = *pCreateInfo;
-    auto* device = new (std::nothrow) Device(info);
-    if (!device) return VK_ERROR_OUT_OF_HOST_MEMORY;
+    VkAllocationCallbacks callbacks{};
+    if (pAllocator && pAllocator->pfnAllocation && pAllocator->pfnFree) callbacks = *pAllocator;
+    vkas::CallbacksResource memory(callbacks, VK_SYSTEM_ALLOCATION_SCOPE_DEVICE);
+    std::pmr::memory_resource* r = memory.orElse(std::pmr::new_delete_resource());
+    void* p = r->allocate(sizeof(Device), alignof(Device));  // throws bad_alloc: VK_ERROR_OUT_OF_HOST_MEMORY
+    Device* device;
+    try {
+        device = new (p) Device(info, callbacks);
+    } catch (...) {
+        r->deallocate(p, sizeof(Device), alignof(Device));
+        throw;
+    }
     *pDevice = device->handle();
     return VK_SUCCESS;
-    });
+}
+}  // namespace
+
+extern "C" VKAS_API VkResult vkasCreateDevice(const VkasDeviceCreateInfo* pCreateInfo, VkDevice* pDevice) {
+    return vkas::guarded([&] { return createDevice(pCreateInfo, nullptr, pDevice); });
+}
+
+extern "C" VKAS_API VkResult vkasCreateDeviceWithAllocator(const VkasDeviceCreateInfo* pCreateInfo,
+                                                           const VkAllocationCallbacks* pAllocator,
+                                                           VkDevice* pDevice) {
+    return vkas::guarded([&] { return createDevice(pCreateInfo, pAllocator, pDevice); });
 }
 
 extern "C" VKAS_API void vkasDestroyDevice(VkDevice device) {
     Device* dev = Device::fromHandle(device);
     if (!dev) return;
+    vkas::ScopedHostMemory scope(dev->commandMemory());
     size_t leaked = dev->releaseAll();
-    if (leaked != 0 && dev->validationEnabled()) {
+    if (leaked != 0 && dev->validationEnabled()) try {
         vkas::Validator v(dev, "vkDestroyDevice");
         v.fail("VUID-vkDestroyDevice-device-05137",
                "%zu objects (buffers, memory, acceleration structures or micromaps) created from device were not destroyed; "
                "vkas freed them.",
                leaked);
+    } catch (...) {  // the message could not be allocated: the device is destroyed all the same
     }
-    delete dev;
+    const VkAllocationCallbacks callbacks = dev->allocator();
+    dev->~Device();
+    vkas::CallbacksResource memory(callbacks, VK_SYSTEM_ALLOCATION_SCOPE_DEVICE);
+    memory.orElse(std::pmr::new_delete_resource())->deallocate(dev, sizeof(Device), alignof(Device));
 }

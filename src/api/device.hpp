@@ -4,20 +4,32 @@
 #include <vulkan/vulkan_core.h>
 
 #include <memory>
+#include <memory_resource>
 #include <mutex>
-#include <unordered_map>
 #include <unordered_set>
 
+#include "api/host_allocator.hpp"
 #include "api/objects.hpp"
 #include "api/thread_pool.hpp"
+#include "engine/util/host_memory.hpp"
 #include "vkas/vkas.h"
 
 namespace vkas {
 
 class Device {
 public:
-    explicit Device(const VkasDeviceCreateInfo& info);
+    // `allocator`: the VkAllocationCallbacks of vkasCreateDeviceWithAllocator (zeroed: none). The Device itself
+    // lives in memory from them (scope DEVICE) when there are some.
+    Device(const VkasDeviceCreateInfo& info, const VkAllocationCallbacks& allocator);
     ~Device();
+
+    // The device's VkAllocationCallbacks (zeroed: none) and the resources over them, one per scope; without
+    // callbacks each is std::pmr::new_delete_resource(). commandMemory() is made current for every command of the
+    // device that has no pAllocator of its own (api/guard.hpp, HostMemoryFor).
+    const VkAllocationCallbacks& allocator() const { return allocator_; }
+    std::pmr::memory_resource* commandMemory() { return command_.orElse(std::pmr::new_delete_resource()); }
+    std::pmr::memory_resource* objectMemory() { return object_.orElse(std::pmr::new_delete_resource()); }
+    std::pmr::memory_resource* deviceMemory() { return device_.orElse(std::pmr::new_delete_resource()); }
 
     // The live device `device` is, or nullptr (unknown or destroyed handles are never dereferenced).
     static Device* fromHandle(VkDevice device);
@@ -44,7 +56,8 @@ public:
     // BOTTOM_LEVEL or GENERIC, bound to memory), by device address (the host address of their block), for
     // deserialization to map handle-array entries to them. Where several alias one address, a BOTTOM_LEVEL one is
     // preferred (they share their bytes, so any of them traces alike).
-    std::unordered_map<uint64_t, const AccelerationStructure*> bottomLevelsByAddress() const;
+    // Allocated from the thread's current resource (the command's).
+    HostUnorderedMap<uint64_t, const AccelerationStructure*> bottomLevelsByAddress() const;
 
     template <class T>
     T* live(const void* handle, ObjectMagic magic) const {
@@ -57,10 +70,12 @@ private:
     static constexpr uint64_t kMagic = 0x564B41534445564Full;  // "VKASDEVO"
     uint64_t magic_ = kMagic;  // first: the dispatchable handle points here
     VkasDeviceCreateInfo info_;
+    VkAllocationCallbacks allocator_{};
+    CallbacksResource command_, object_, device_;
     mutable std::mutex mutex_;
-    std::unordered_set<const void*> objects_;
+    HostUnorderedSet<const void*> objects_;  // from deviceMemory()
     std::mutex workersMutex_;  // not std::call_once: a pool that failed to start (out of memory) is retried
-    std::unique_ptr<ThreadPool> workers_;
+    HostUnique<ThreadPool> workers_;  // from deviceMemory()
 };
 
 // The block of the bottom-level structure an instance's accelerationStructureReference names (or nullptr).

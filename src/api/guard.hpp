@@ -10,11 +10,14 @@
 #include <cstring>
 #include <exception>
 #include <new>
+#include <optional>
 #include <stdexcept>
 #include <type_traits>
 
+#include "api/host_allocator.hpp"
 #include "api/objects.hpp"
 #include "engine/format/layout.hpp"
+#include "engine/util/host_memory.hpp"
 
 namespace vkas {
 
@@ -52,12 +55,48 @@ auto guarded(Fn&& fn) noexcept -> decltype(fn()) {
     }
 }
 
-// Guarded<&F>::call has F's exact signature and runs F through guarded(): the proc table hands these out.
+// The host memory of a command's temporaries (scope COMMAND): its own pAllocator when it has one (its last
+// `const VkAllocationCallbacks*` parameter, not NULL), otherwise its device's (vkasCreateDeviceWithAllocator),
+// otherwise operator new. Made the thread's current resource (engine/util/host_memory.hpp) for the whole command.
+std::pmr::memory_resource* deviceCommandMemory(VkDevice device) noexcept;  // device.cpp; nullptr: none
+
+template <class... A>
+class CommandHostMemory {
+  public:
+    explicit CommandHostMemory(const A&... args) noexcept {
+        std::pmr::memory_resource* r = nullptr;
+        const VkAllocationCallbacks* given = nullptr;
+        VkDevice device = VK_NULL_HANDLE;
+        (take(args, given, device), ...);
+        if (given && given->pfnAllocation && given->pfnFree) {
+            own_ = CallbacksResource(*given, VK_SYSTEM_ALLOCATION_SCOPE_COMMAND);
+            r = &own_;
+        } else if (device) {
+            r = deviceCommandMemory(device);
+        }
+        scope_.emplace(r);
+    }
+
+  private:
+    template <class T>
+    static void take(const T& arg, const VkAllocationCallbacks*& given, VkDevice& device) {
+        if constexpr (std::is_same_v<T, const VkAllocationCallbacks*>)
+            given = arg;
+        else if constexpr (std::is_same_v<T, VkDevice>)
+            if (!device) device = arg;
+    }
+    CallbacksResource own_;
+    std::optional<ScopedHostMemory> scope_;
+};
+
+// Guarded<&F>::call has F's exact signature and runs F through guarded() with the command's host memory current:
+// the proc table hands these out.
 template <auto F>
 struct Guarded;
 template <class R, class... A, R(VKAPI_PTR* F)(A...)>
 struct Guarded<F> {
     static VKAPI_ATTR R VKAPI_CALL call(A... args) noexcept {
+        CommandHostMemory<A...> memory(args...);
         return guarded([&]() -> R { return F(args...); });
     }
 };

@@ -245,10 +245,12 @@ VKAPI_ATTR void VKAPI_CALL DestroyDevice(VkDevice device, const VkAllocationCall
     Device* dev = Device::fromHandle(device);
     Validator v(dev, "vkDestroyDevice");
     if (!dev) return v.fail("VUID-vkDestroyDevice-device-parameter", "device is not a valid VkDevice.");
-    // vkasCreateDevice takes no VkAllocationCallbacks.
-    if (v.enabled() && !v.check(pAllocator == nullptr, "VUID-vkDestroyDevice-device-00380",
-                                "pAllocator is not NULL but the device was created without VkAllocationCallbacks."))
-        return;
+    // vkasCreateDeviceWithAllocator's callbacks, or none (vkasCreateDevice).
+    if (v.enabled()) {
+        checkDestroyAllocator(v, dev->allocator(), pAllocator, "VUID-vkDestroyDevice-device-00379",
+                              "VUID-vkDestroyDevice-device-00380");
+        if (v.failed()) return;
+    }
     vkasDestroyDevice(device);
 }
 

@@ -50,7 +50,10 @@ void ThreadPool::workerLoop() {
             seen = generation_;
             ++busy_;
         }
-        runTasks();
+        {
+            ScopedHostMemory memory(memory_.load());
+            runTasks();
+        }
         {
             std::lock_guard lock(mutex_);
             if (--busy_ == 0) finished_.notify_all();
@@ -58,7 +61,7 @@ void ThreadPool::workerLoop() {
     }
 }
 
-void ThreadPool::parallelFor(uint64_t count, const std::function<void(uint64_t)>& task) {
+void ThreadPool::parallelFor(uint64_t count, FunctionRef<void(uint64_t)> task) {
     if (count == 0) return;
     std::lock_guard call(callMutex_);
     if (workers_.empty() || count == 1) {
@@ -70,6 +73,7 @@ void ThreadPool::parallelFor(uint64_t count, const std::function<void(uint64_t)>
         next_.store(~uint64_t(0) >> 1);  // a late worker of the last call claims nothing
         error_ = nullptr;
         task_.store(&task);
+        memory_.store(currentHostMemory());
         count_.store(count);
         next_.store(0);
         ++generation_;

@@ -5,10 +5,12 @@
 #include <condition_variable>
 #include <cstdint>
 #include <exception>
-#include <functional>
+#include <memory_resource>
 #include <mutex>
 #include <thread>
-#include <vector>
+
+#include "engine/util/function_ref.hpp"
+#include "engine/util/host_memory.hpp"
 
 namespace vkas {
 
@@ -23,18 +25,20 @@ public:
     // Calls task(i) for every i in [0, count) on the workers and the calling thread; returns when all are done.
     // One parallelFor runs at a time; concurrent callers wait their turn. When a task throws (out of memory), the
     // tasks not started yet are skipped and parallelFor rethrows the first exception once every thread is done.
-    void parallelFor(uint64_t count, const std::function<void(uint64_t)>& task);
+    // The workers run the tasks with the caller's current host memory (engine/util/host_memory.hpp).
+    void parallelFor(uint64_t count, FunctionRef<void(uint64_t)> task);
 
 private:
     void workerLoop();
     void runTasks();
     void stopAndJoin();
 
-    std::vector<std::thread> workers_;
+    HostVector<std::thread> workers_;  // the list from the current host memory at construction (the device's)
     std::mutex callMutex_;  // serialises parallelFor calls
     std::mutex mutex_;
     std::condition_variable wake_, finished_;
-    std::atomic<const std::function<void(uint64_t)>*> task_{nullptr};
+    std::atomic<const FunctionRef<void(uint64_t)>*> task_{nullptr};
+    std::atomic<std::pmr::memory_resource*> memory_{nullptr};  // the current call's caller's host memory
     std::atomic<uint64_t> count_{0};
     std::atomic<uint64_t> next_{0};
     uint32_t busy_ = 0;

@@ -7,10 +7,13 @@
 #include <cstdint>
 #include <functional>
 
+#include "engine/util/function_ref.hpp"
+
 namespace vkas {
 
-// Runs fn(i) for every i in [0, count), possibly on several threads, and returns when all have run.
-using ParallelFor = std::function<void(uint32_t count, const std::function<void(uint32_t)>& fn)>;
+// Runs fn(i) for every i in [0, count), possibly on several threads, and returns when all have run. fn is passed by
+// reference (FunctionRef): spreading a loop allocates nothing for the loop's callable.
+using ParallelFor = std::function<void(uint32_t count, FunctionRef<void(uint32_t)> fn)>;
 
 // fn(i) for every i in [0, count): on `parallel`'s threads when there is one and more than one index, otherwise in
 // order on the calling thread.
