@@ -17,17 +17,15 @@
 namespace vkas {
 
 namespace {
-// Every live device and object of the process, with the device that owns it (a device owns itself). Handles are
-// looked up here before they are dereferenced, so an unknown, destroyed or foreign handle is recognised without
-// touching the memory it points to.
-std::shared_mutex gRegistryMutex;
-// Counts the registry's changes (under the writer lock): a lookup cached at one value is still the registry's answer
+// The live devices of the process, a list through the devices themselves (registering one allocates nothing). Each
+// device keeps the set of its live objects (Device::objects_, in the device's memory); a handle is looked up there
+// before it is dereferenced, so an unknown, destroyed or foreign handle is recognised without touching the memory it
+// points to.
+std::shared_mutex gRegistryMutex;  // guards the list; taken before any device's mutex_, never after
+Device* gDevices = nullptr;
+// Counts the changes of the devices and their live sets: a lookup cached at one value is still the registry's answer
 // while the count has not moved (ray_query_api.cpp caches its last top-level lookup per thread).
 std::atomic<uint64_t> gRegistryGeneration{0};
-std::unordered_map<const void*, Device*>& registry() {
-    static auto* objects = new std::unordered_map<const void*, Device*>;  // never destroyed: used until exit
-    return *objects;
-}
 }  // namespace
 
 Device::Device(const VkasDeviceCreateInfo& info, const VkAllocationCallbacks& allocator)
@@ -38,22 +36,28 @@ Device::Device(const VkasDeviceCreateInfo& info, const VkAllocationCallbacks& al
       device_(allocator, VK_SYSTEM_ALLOCATION_SCOPE_DEVICE),
       objects_(HostAllocator<const void*>(deviceMemory())) {
     std::unique_lock lock(gRegistryMutex);
-    registry().emplace(this, this);
+    nextDevice_ = gDevices;
+    gDevices = this;
     gRegistryGeneration.fetch_add(1, std::memory_order_release);
 }
 
 Device::~Device() {
     magic_ = 0;
     std::unique_lock lock(gRegistryMutex);
-    registry().erase(this);
+    for (Device** d = &gDevices; *d; d = &(*d)->nextDevice_)
+        if (*d == this) {
+            *d = nextDevice_;
+            break;
+        }
     gRegistryGeneration.fetch_add(1, std::memory_order_release);
 }
 
 Device* Device::fromHandle(VkDevice device) {
     if (!device) return nullptr;
     std::shared_lock lock(gRegistryMutex);
-    auto it = registry().find(device);
-    return it != registry().end() && it->second == static_cast<const void*>(device) ? it->second : nullptr;
+    for (Device* d = gDevices; d; d = d->nextDevice_)
+        if (static_cast<const void*>(d) == static_cast<const void*>(device)) return d;
+    return nullptr;
 }
 
 uint64_t Device::registryGeneration() { return gRegistryGeneration.load(std::memory_order_acquire); }
@@ -61,8 +65,9 @@ uint64_t Device::registryGeneration() { return gRegistryGeneration.load(std::mem
 Device* Device::ownerOf(const void* object) {
     if (!object) return nullptr;
     std::shared_lock lock(gRegistryMutex);
-    auto it = registry().find(object);
-    return it != registry().end() && it->second != object ? it->second : nullptr;
+    for (Device* d = gDevices; d; d = d->nextDevice_)
+        if (d->isLive(object)) return d;
+    return nullptr;
 }
 
 ThreadPool& Device::workers() {
@@ -77,34 +82,21 @@ ThreadPool& Device::workers() {
 }
 
 bool Device::track(const void* object) noexcept {
-    // Out of memory in either set leaves both as they were.
-    try {
-        std::unique_lock lock(gRegistryMutex);
-        registry()[object] = this;
-        gRegistryGeneration.fetch_add(1, std::memory_order_release);
-    } catch (...) {
-        return false;
-    }
+    // Out of memory leaves the set as it was.
     try {
         std::lock_guard lock(mutex_);
         objects_.insert(object);
-    } catch (...) {
-        std::unique_lock lock(gRegistryMutex);
-        registry().erase(object);
         gRegistryGeneration.fetch_add(1, std::memory_order_release);
+    } catch (...) {
         return false;
     }
     return true;
 }
 
 void Device::untrack(const void* object) {
-    {
-        std::unique_lock lock(gRegistryMutex);
-        registry().erase(object);
-        gRegistryGeneration.fetch_add(1, std::memory_order_release);
-    }
     std::lock_guard lock(mutex_);
     objects_.erase(object);
+    gRegistryGeneration.fetch_add(1, std::memory_order_release);
 }
 
 bool Device::isLive(const void* object) const {
@@ -128,11 +120,7 @@ HostUnorderedMap<uint64_t, const AccelerationStructure*> Device::bottomLevelsByA
 
 size_t Device::releaseAll() {
     std::lock_guard lock(mutex_);
-    {
-        std::unique_lock registryLock(gRegistryMutex);
-        for (const void* o : objects_) registry().erase(o);
-        gRegistryGeneration.fetch_add(1, std::memory_order_release);
-    }
+    gRegistryGeneration.fetch_add(1, std::memory_order_release);
     // One pass per type, in dependency order, erasing as it goes; allocates nothing (vkasDestroyDevice cannot
     // fail). Each object is freed the way it was allocated (destroyObject: through its VkAllocationCallbacks, if any).
     const size_t n = objects_.size();

@@ -43,8 +43,9 @@ public:
     const VkasDeviceCreateInfo& createInfo() const { return info_; }
     ThreadPool& workers();
 
-    // Live-object registry, so validation can recognise unknown, destroyed or wrong-type handles.
-    // track() returns false when the registry cannot grow (out of memory): the object is not registered.
+    // This device's live objects, so validation can recognise unknown, destroyed or wrong-type handles (no
+    // process-wide registry: ownerOf asks each live device). track() returns false when the set cannot grow (out of
+    // memory): the object is not registered.
     bool track(const void* object) noexcept;
     void untrack(const void* object);
     bool isLive(const void* object) const;
@@ -76,6 +77,7 @@ private:
     HostUnorderedSet<const void*> objects_;  // from deviceMemory()
     std::mutex workersMutex_;  // not std::call_once: a pool that failed to start (out of memory) is retried
     HostUnique<ThreadPool> workers_;  // from deviceMemory()
+    Device* nextDevice_ = nullptr;    // the process's list of live devices (device.cpp)
 };
 
 // The block of the bottom-level structure an instance's accelerationStructureReference names (or nullptr).
