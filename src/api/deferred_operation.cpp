@@ -189,7 +189,7 @@ VKAPI_ATTR VkResult VKAPI_CALL CreateDeferredOperationKHR(VkDevice device, const
                 "pDeferredOperation is NULL.");
         if (v.failed()) return VK_ERROR_VALIDATION_FAILED_EXT;
     }
-    auto* op = createObject<DeferredOperation>(pAllocator);
+    auto* op = createObject<DeferredOperation>(pAllocator, dev->allocator());
     if (!op) return VK_ERROR_OUT_OF_HOST_MEMORY;
     op->device = dev;
     op->setHostMemory(hasCallbacks(op->allocator) ? op->allocator : dev->allocator());

@@ -32,6 +32,7 @@ public:
     ObjectMagic magic = ObjectMagic::DeferredOperation;
     Device* device = nullptr;
     VkAllocationCallbacks allocator{};  // the pAllocator of vkCreateDeferredOperationKHR (zero: none)
+    VkAllocationCallbacks memoryCallbacks{};  // what this object's memory came from (createObject)
 
     // The callbacks the operation allocates through (its own, else the device's; zeroed: operator new). Called once,
     // at creation, before anything is queued.

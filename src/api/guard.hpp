@@ -109,14 +109,21 @@ inline void markUnconstructed(AccelerationStructure& as) noexcept {
         std::memset(block + offsetof(format::Header, magic), 0, sizeof(format::Header::magic));
 }
 
-// The object's own host allocation, through the application's VkAllocationCallbacks when it gives them (scope
-// OBJECT; kept in the object so that it is freed through the same callbacks, by vkDestroy* or vkasDestroyDevice).
+// The object's own host allocation (scope OBJECT): through the application's VkAllocationCallbacks when it gives
+// them, otherwise through its device's (vkasCreateDeviceWithAllocator), otherwise operator new. `allocator` keeps
+// what the application gave (for the destroy command's checks, 03434/03435 and the like); `memoryCallbacks` what
+// the object's memory came from, so that it is freed the same way, by vkDestroy* or vkasDestroyDevice.
 // Returns nullptr when the allocation fails (VK_ERROR_OUT_OF_HOST_MEMORY).
 template <class T>
-T* createObject(const VkAllocationCallbacks* allocator) {
-    void* p = nullptr;
+T* createObject(const VkAllocationCallbacks* allocator, const VkAllocationCallbacks& deviceCallbacks) {
+    VkAllocationCallbacks callbacks{};
     if (allocator && allocator->pfnAllocation)
-        p = allocator->pfnAllocation(allocator->pUserData, sizeof(T), alignof(T), VK_SYSTEM_ALLOCATION_SCOPE_OBJECT);
+        callbacks = *allocator;
+    else if (deviceCallbacks.pfnAllocation)
+        callbacks = deviceCallbacks;
+    void* p = nullptr;
+    if (callbacks.pfnAllocation)
+        p = callbacks.pfnAllocation(callbacks.pUserData, sizeof(T), alignof(T), VK_SYSTEM_ALLOCATION_SCOPE_OBJECT);
     else
         p = ::operator new(sizeof(T), std::nothrow);
     if (!p) return nullptr;
@@ -124,24 +131,25 @@ T* createObject(const VkAllocationCallbacks* allocator) {
     try {
         object = new (p) T;
     } catch (...) {
-        if (allocator && allocator->pfnAllocation)
-            allocator->pfnFree(allocator->pUserData, p);
+        if (callbacks.pfnAllocation)
+            callbacks.pfnFree(callbacks.pUserData, p);
         else
             ::operator delete(p);
         throw;
     }
     if (allocator && allocator->pfnAllocation) object->allocator = *allocator;
+    object->memoryCallbacks = callbacks;
     return object;
 }
 
 template <class T>
 void destroyObject(T* object) noexcept {
     if (!object) return;
-    const VkAllocationCallbacks allocator = object->allocator;
+    const VkAllocationCallbacks callbacks = object->memoryCallbacks;
     object->magic = ObjectMagic::Dead;
     object->~T();
-    if (allocator.pfnFree)
-        allocator.pfnFree(allocator.pUserData, object);
+    if (callbacks.pfnFree)
+        callbacks.pfnFree(callbacks.pUserData, object);
     else
         ::operator delete(object);
 }

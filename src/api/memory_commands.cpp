@@ -32,7 +32,7 @@ VKAPI_ATTR VkResult VKAPI_CALL CreateBuffer(VkDevice device, const VkBufferCreat
         v.check(pBuffer != nullptr, "VUID-vkCreateBuffer-pBuffer-parameter", "pBuffer is NULL.");
         if (v.failed()) return VK_ERROR_VALIDATION_FAILED_EXT;
     }
-    auto* buffer = createObject<Buffer>(pAllocator);
+    auto* buffer = createObject<Buffer>(pAllocator, dev->allocator());
     if (!buffer) return VK_ERROR_OUT_OF_HOST_MEMORY;
     buffer->device = dev;
     buffer->size = pCreateInfo->size;
@@ -99,7 +99,7 @@ VKAPI_ATTR VkResult VKAPI_CALL AllocateMemory(VkDevice device, const VkMemoryAll
     VkDeviceSize size = pAllocateInfo->allocationSize;
     VkDeviceSize rounded = (size + kMemoryAlignment - 1) / kMemoryAlignment * kMemoryAlignment;
     if (rounded < size) return VK_ERROR_OUT_OF_HOST_MEMORY;
-    auto* memory = createObject<Memory>(pAllocator);
+    auto* memory = createObject<Memory>(pAllocator, dev->allocator());
     if (!memory) return VK_ERROR_OUT_OF_HOST_MEMORY;
     memory->data = static_cast<std::byte*>(std::aligned_alloc(kMemoryAlignment, rounded));
     memory->device = dev;

@@ -59,7 +59,7 @@ VKAPI_ATTR VkResult VKAPI_CALL CreateMicromapEXT(VkDevice device, const VkMicrom
         v.check(pMicromap != nullptr, "VUID-vkCreateMicromapEXT-pMicromap-parameter", "pMicromap is NULL.");
         if (v.failed()) return VK_ERROR_VALIDATION_FAILED_EXT;
     }
-    auto* micromap = createObject<Micromap>(pAllocator);
+    auto* micromap = createObject<Micromap>(pAllocator, dev->allocator());
     if (!micromap) return VK_ERROR_OUT_OF_HOST_MEMORY;
     micromap->device = dev;
     micromap->buffer = fromHandle<Buffer>(pCreateInfo->buffer);

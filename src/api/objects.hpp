@@ -28,6 +28,7 @@ struct Memory {
     bool mapped = false;
     VkMemoryAllocateFlags allocateFlags = 0;  // VkMemoryAllocateFlagsInfo::flags at allocation
     VkAllocationCallbacks allocator{};  // the pAllocator of vkAllocateMemory (zero: none)
+    VkAllocationCallbacks memoryCallbacks{};  // what this struct\'s memory came from (createObject)
 };
 
 struct Buffer {
@@ -39,6 +40,7 @@ struct Buffer {
     Memory* memory = nullptr;
     VkDeviceSize memoryOffset = 0;
     VkAllocationCallbacks allocator{};  // the pAllocator of vkCreateBuffer (zero: none)
+    VkAllocationCallbacks memoryCallbacks{};  // what this struct\'s memory came from (createObject)
 
     std::byte* hostAddress() const { return memory ? memory->data + memoryOffset : nullptr; }
 };
@@ -53,6 +55,7 @@ struct AccelerationStructure {
     VkAccelerationStructureCreateFlagsKHR createFlags = 0;
     bool constructed = false;  // a build or copy has written it
     VkAllocationCallbacks allocator{};  // the pAllocator of vkCreateAccelerationStructureKHR (zero: none)
+    VkAllocationCallbacks memoryCallbacks{};  // what this struct\'s memory came from (createObject)
 
     // The structure's block: where its bytes live, or nullptr while its buffer has no memory.
     std::byte* block() const {
@@ -72,6 +75,7 @@ struct Micromap {
     VkMicromapCreateFlagsEXT createFlags = 0;
     bool constructed = false;  // a build or copy has written it
     VkAllocationCallbacks allocator{};  // the pAllocator of vkCreateMicromapEXT (zero: none)
+    VkAllocationCallbacks memoryCallbacks{};  // what this struct\'s memory came from (createObject)
 
     std::byte* block() const {
         std::byte* base = buffer ? buffer->hostAddress() : nullptr;

@@ -92,7 +92,7 @@ VKAPI_ATTR VkResult VKAPI_CALL CreateAccelerationStructureKHR(VkDevice device,
                 "pAccelerationStructure is NULL.");
         if (v.failed()) return VK_ERROR_VALIDATION_FAILED_EXT;
     }
-    auto* as = createObject<AccelerationStructure>(pAllocator);
+    auto* as = createObject<AccelerationStructure>(pAllocator, dev->allocator());
     if (!as) return VK_ERROR_OUT_OF_HOST_MEMORY;
     as->device = dev;
     as->buffer = fromHandle<Buffer>(pCreateInfo->buffer);

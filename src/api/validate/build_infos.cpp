@@ -186,7 +186,7 @@ void checkBuildAccelerationStructures(Validator& v, const Device& dev, VkDeferre
             "VUID-vkBuildAccelerationStructuresKHR-ppBuildRangeInfos-parameter", "ppBuildRangeInfos is NULL.");
     if (v.failed()) return;
     HostVector<InfoFootprint> footprints(infoCount);
-    std::unordered_set<const void*> dsts;
+    HostUnorderedSet<const void*> dsts;
     for (uint32_t i = 0; i < infoCount; ++i) {
         v.check(ppBuildRangeInfos[i] != nullptr || pInfos[i].geometryCount == 0,
                 "VUID-vkBuildAccelerationStructuresKHR-pInfos-11702", "ppBuildRangeInfos[%u] is NULL.", i);
