@@ -323,7 +323,10 @@ void VkasTest::SetUp() {
     ci.pfnMessenger = &VkasTest::messenger;
     ci.pMessengerUserData = this;
     ci.workerThreadCount = 2;
-    ASSERT_EQ(vkasCreateDevice(&ci, &device), VK_SUCCESS);
+    if (const VkAllocationCallbacks* allocator = deviceAllocator())
+        ASSERT_EQ(vkasCreateDeviceWithAllocator(&ci, allocator, &device), VK_SUCCESS);
+    else
+        ASSERT_EQ(vkasCreateDevice(&ci, &device), VK_SUCCESS);
     ASSERT_NE(device, VK_NULL_HANDLE);
 #define VT_LOAD(name)                                                                     \
     vk.name = reinterpret_cast<PFN_##name>(vkasGetDeviceProcAddr(device, #name));          \

@@ -209,6 +209,8 @@ class VkasTest : public ::testing::Test {
   protected:
     void SetUp() override;
     void TearDown() override;
+    // The VkAllocationCallbacks SetUp creates the device with (vkasCreateDeviceWithAllocator); NULL: vkasCreateDevice.
+    virtual const VkAllocationCallbacks* deviceAllocator() { return nullptr; }
 
     VkDevice device = VK_NULL_HANDLE;
     Commands vk;
