@@ -1,6 +1,9 @@
 // Valid-usage cases: buffers, device memory and the device itself.
 #include "harness.hpp"
 
+#include <algorithm>
+#include <cstdlib>
+
 namespace vu {
 
 namespace {
@@ -502,6 +505,32 @@ void addMemoryCases(std::vector<Case>& c) {
             t.deferred.destroyDevice(t.bogus<VkDevice>(), nullptr);
             return V();
         });
+        (void)vk;
+        (void)dev;
+    });
+    CASE("VUID-vkDestroyDevice-device-00379", {
+        // A device created with callbacks, destroyed without: reported, nothing destroyed.
+        static VkAllocationCallbacks callbacks = [] {
+            VkAllocationCallbacks c{};
+            c.pfnAllocation = [](void*, size_t size, size_t alignment, VkSystemAllocationScope) -> void* {
+                void* p = nullptr;
+                return posix_memalign(&p, std::max<size_t>(alignment, sizeof(void*)), size) == 0 ? p : nullptr;
+            };
+            c.pfnReallocation = [](void*, void*, size_t, size_t, VkSystemAllocationScope) -> void* { return nullptr; };
+            c.pfnFree = [](void*, void* p) { std::free(p); };
+            return c;
+        }();
+        VkasDeviceCreateInfo ci{};
+        ci.pfnMessenger = &vt::VkasTest::messenger;
+        ci.pMessengerUserData = static_cast<vt::VkasTest*>(&t);
+        VkDevice withCallbacks = VK_NULL_HANDLE;
+        ASSERT_EQ(vkasCreateDeviceWithAllocator(&ci, &callbacks, &withCallbacks), VK_SUCCESS);
+        t.call([&] {
+            t.deferred.destroyDevice(withCallbacks, nullptr);
+            return V();
+        });
+        EXPECT_NE(vkasGetDeviceProcAddr(withCallbacks, "vkDestroyDevice"), nullptr) << "the device was destroyed";
+        vkasDestroyDevice(withCallbacks);
         (void)vk;
         (void)dev;
     });
