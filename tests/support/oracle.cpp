@@ -310,6 +310,7 @@ size_t Result::requiredCount() const {
 
 Result Result::withoutAabbs() const {
     Result r;
+    r.candidates.reserve(candidates.size());  // rays through tens of thousands of coincident triangles
     for (const Candidate& c : candidates)
         if (!c.aabb) r.candidates.push_back(c);
     return r;
