@@ -1,8 +1,9 @@
 // What a refit (VK_BUILD_ACCELERATION_STRUCTURE_MODE_UPDATE_KHR) costs against a build: a bumpy sphere (4 N^2
 // triangles) built with ALLOW_UPDATE, then refitted in place with every vertex moved, with validation on and off.
-// Usage: vkas_bench_refit [N]   (default 512: 1,048,576 triangles)
+// Usage: vkas_bench_refit [N [REFITS]]   (default 512: 1,048,576 triangles; 3 refits, the best printed)
 #include <vkas/vkas.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -16,8 +17,8 @@ double msSince(std::chrono::steady_clock::time_point t0) {
     return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 }
 
-// Builds once and refits three times on a device with validation on or off; prints the best refit.
-void measure(bool validation, int n) {
+// Builds once and refits `refits` times on a device with validation on or off; prints the best refit.
+void measure(bool validation, int n, int refits) {
     VkasDeviceCreateInfo dci{};
     dci.disableValidation = validation ? VK_FALSE : VK_TRUE;
     VkDevice dev;
@@ -100,7 +101,7 @@ void measure(bool validation, int n) {
     info.srcAccelerationStructure = as;
     info.scratchData.hostAddress = nullptr;
     double best = 1e300;
-    for (int k = 0; k < 3; ++k) {
+    for (int k = 0; k < refits; ++k) {
         t.vertexData.hostAddress = (k % 2 == 0) ? moved.data() : v.data();
         t0 = std::chrono::steady_clock::now();
         if (vkBuildAccelerationStructuresKHR(dev, VK_NULL_HANDLE, 1, &info, &pRange) != VK_SUCCESS) std::exit(1);
@@ -118,8 +119,9 @@ void measure(bool validation, int n) {
 
 int main(int argc, char** argv) {
     const int n = argc > 1 ? std::atoi(argv[1]) : 512;
+    const int refits = argc > 2 ? std::max(1, std::atoi(argv[2])) : 3;
     std::printf("%d triangles, one thread\n", 4 * n * n);
-    measure(false, n);
-    measure(true, n);
+    measure(false, n, refits);
+    measure(true, n, refits);
     return 0;
 }
