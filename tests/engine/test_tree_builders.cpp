@@ -77,6 +77,11 @@ Aabb checkSubtree(const std::vector<Node>& nodes, ChildRef ref, uint32_t parent,
         EXPECT_TRUE(n.lowerX[i] <= c.lower.x && n.lowerY[i] <= c.lower.y && n.lowerZ[i] <= c.lower.z &&
                     n.upperX[i] >= c.upper.x && n.upperY[i] >= c.upper.y && n.upperZ[i] >= c.upper.z)
             << "node " << k << " slot " << i << " does not hold its subtree";
+        // Tight, too: a slot's box is its subtree's union, also where the split was chosen from a sample of the
+        // range (BvhBuildSettings::binSampleTarget) and the bounds came from the partition.
+        EXPECT_TRUE(n.lowerX[i] == c.lower.x && n.lowerY[i] == c.lower.y && n.lowerZ[i] == c.lower.z &&
+                    n.upperX[i] == c.upper.x && n.upperY[i] == c.upper.y && n.upperZ[i] == c.upper.z)
+            << "node " << k << " slot " << i << " is larger than its subtree";
         box.extend(c);
     }
     return box;
@@ -122,6 +127,8 @@ TEST_F(TreeBuilders, both_builders_keep_the_output_contract_and_ignore_threading
                 const BvhBuildSettings settings = buildSettingsFor(maxLeaf, flags);
                 EXPECT_EQ(settings.morton, (flags & VK_BUILD_ACCELERATION_STRUCTURE_PREFER_FAST_BUILD_BIT_KHR) != 0);
                 EXPECT_EQ(settings.quality, (flags & VK_BUILD_ACCELERATION_STRUCTURE_PREFER_FAST_TRACE_BIT_KHR) != 0);
+                // Only the default bottom-level build bins samples of large ranges (n 20000 and 150000 do).
+                EXPECT_EQ(settings.binSampleTarget != 0, flags == 0 && maxLeaf != format::kMaxInstancesPerLeaf);
                 const Built serial = build(refs, settings, nullptr);
                 EXPECT_LE(serial.result.nodeCount, maxWideNodeCount(n, maxLeaf));
                 std::vector<uint32_t> seen(n, 0);

@@ -35,6 +35,10 @@ struct Range {
     uint32_t begin = 0, end = 0;
     uint32_t depth = 0;
     Aabb bounds;
+    // Where the range's refs are: the refs array, or the same indices of the spare array, where a stable partition
+    // left them (WideBuilder::stablePartition; they return to the refs array before anything but a stable partition
+    // touches them).
+    bool inSpare = false;
     uint32_t count() const { return end - begin; }
 };
 
@@ -59,7 +63,10 @@ public:
     static bool isDeferred(ChildRef r) { return (r >> format::kKindShift) == kDeferredKind; }
 
     ChildRef build(const Range& r) {
-        if (r.count() <= settings_.maxLeafSize) return format::makeLeafRef(r.begin, r.count());
+        if (r.count() <= settings_.maxLeafSize) {
+            returnToRefs(r);
+            return format::makeLeafRef(r.begin, r.count());
+        }
         if (r.count() <= deferThreshold_) {
             deferred_.push_back(r);
             return deferredRef(deferred_.size() - 1);
@@ -109,8 +116,24 @@ public:
 
     uint32_t nodeCount() const { return nodeCount_; }
 
-    // One binary SAH split of r (more than one primitive) into left and right, as build() splits a node's children.
-    void splitRange(const Range& r, Range& left, Range& right) { split(r, left, right); }
+    // One binary SAH split of r (more than one primitive) into left and right, as build() splits a node's children,
+    // both in the refs array.
+    void splitRange(const Range& r, Range& left, Range& right) {
+        split(r, left, right);
+        returnToRefs(left);
+        returnToRefs(right);
+    }
+
+    // Copies a range that a stable partition left in the spare array back to the refs array (in chunks that may run
+    // on several threads; a copy: the same bytes either way).
+    void returnToRefs(const Range& r) {
+        if (!r.inSpare) return;
+        const uint32_t chunks = (r.count() + kPartitionChunk - 1) / kPartitionChunk;
+        runChunks(chunks, [&](uint32_t c) {
+            const uint32_t begin = r.begin + c * kPartitionChunk, end = std::min(r.end, begin + kPartitionChunk);
+            std::copy(spare_ + begin, spare_ + end, refs_ + begin);
+        });
+    }
 
 private:
     // Per axis and bin: the primitives' bounds and their count. SSE boxes: a primitive extends three bins with six
@@ -171,10 +194,11 @@ private:
 
     void finishRange(Range& r) {
         RangeBounds rb;
+        const PrimRef* refs = at(r);
         forChunks(r, [&](uint32_t begin, uint32_t end, RangeBounds& local) {
             for (uint32_t i = begin; i < end; ++i) {
                 __m128 lo, up;
-                load(refs_[i], lo, up);
+                load(refs[i], lo, up);
                 local.bounds.extend(lo, up);
             }
         }, rb, RangeBounds{});
@@ -186,11 +210,18 @@ private:
         left.begin = r.begin, left.end = mid;
         right.begin = mid, right.end = r.end;
         left.depth = right.depth = r.depth + 1;
+        left.inSpare = right.inSpare = r.inSpare;
         finishRange(left);
         finishRange(right);
     }
 
-    void split(const Range& r, Range& left, Range& right) {
+    // The refs of a range, where they are.
+    const PrimRef* at(const Range& r) const { return r.inSpare ? spare_ : refs_; }
+
+    void split(const Range& range, Range& left, Range& right) {
+        // Only a stable partition reads a range from the spare array: a smaller one goes back first.
+        Range r = range;
+        if (r.inSpare && r.count() < kStablePartitionMin) returnToRefs(r), r.inSpare = false;
         // The bins divide the range's bounds, doubled (lower + upper, twice a centroid, lies within them): the
         // children's bounds come from the bins, so no pass gathers centroid bounds. Ranges that are one point are
         // halved; ranges whose centroids coincide fall into one bin and are halved below.
@@ -221,16 +252,21 @@ private:
             return _mm_cvttps_epi32(_mm_min_ps(_mm_max_ps(f, _mm_setzero_ps()), lastBin));
         };
         Bins bins(binCount);
+        // A large range bins every stride-th primitive from its first (binSampleTarget); the sample's indices
+        // depend on the range alone, never on the chunks, so threads see the same sample.
+        const uint32_t stride = sampleStride(r.count());
+        const PrimRef* refs = at(r);
         forChunks(r, [&](uint32_t begin, uint32_t end, Bins& local) {
             uint32_t i = begin;
-            if (end - begin >= 256) {
+            if (stride > 1) i = r.begin + (begin - r.begin + stride - 1) / stride * stride;
+            if (end > i && (end - i) / stride >= 256) {
                 // Neighbouring primitives tend to fall into the same bins: a second set of bins for every other
                 // primitive halves the chains of dependent updates. Merged exactly (min/max, sums).
                 Bins odd(binCount);
-                for (; i + 1 < end; i += 2) {
+                for (; i + stride < end; i += 2 * stride) {
                     __m128 lo0, up0, lo1, up1;
-                    load(refs_[i], lo0, up0);
-                    load(refs_[i + 1], lo1, up1);
+                    load(refs[i], lo0, up0);
+                    load(refs[i + stride], lo1, up1);
                     alignas(16) int b0[4], b1[4];
                     _mm_store_si128(reinterpret_cast<__m128i*>(b0), binsOf(lo0, up0));
                     _mm_store_si128(reinterpret_cast<__m128i*>(b1), binsOf(lo1, up1));
@@ -241,9 +277,9 @@ private:
                 }
                 local.merge(odd);
             }
-            for (; i < end; ++i) {
+            for (; i < end; i += stride) {
                 __m128 lo, up;
-                load(refs_[i], lo, up);
+                load(refs[i], lo, up);
                 alignas(16) int b[4];
                 _mm_store_si128(reinterpret_cast<__m128i*>(b), binsOf(lo, up));
                 for (int k = 0; k < axisCount; ++k) local.add(axes[k], b[axes[k]], lo, up);
@@ -298,6 +334,7 @@ private:
         // bounds gathered on the way (merged in chunk order: the same bytes with threads or without).
         auto add = [](RangeBounds& side, __m128 lo, __m128 up) { side.bounds.extend(lo, up); };
         if (spare_ && r.count() >= kStablePartitionMin) return stablePartition(r, goesLeft, add, left, right);
+        if (stride > 1) return partitionWithBounds(r, goesLeft, left, right);
         // In place, without branches on the side (which is close to random near the leaves): every primitive is
         // swapped with the first one not known to go left, which moves it there if it goes left and leaves the
         // order of [begin, l) left, [l, i) right otherwise. The bounds come from the bins.
@@ -317,6 +354,42 @@ private:
         right.bounds = rightBox.aabb();
     }
 
+    // The stride of the sample a range bins: 1 (every primitive) below twice the settings' sample target.
+    uint32_t sampleStride(uint32_t count) const {
+        const uint32_t target = settings_.binSampleTarget;
+        return target != 0 && count >= 2 * target ? count / target : 1;
+    }
+
+    // The in-place partition of split, for a range whose bins saw only a sample: each side's bounds are gathered on
+    // the way (each primitive extends its own side's box, exactly as RangeBounds::extend would), without branches.
+    template <typename GoesLeft>
+    void partitionWithBounds(const Range& r, const GoesLeft& goesLeft, Range& left, Range& right) {
+        SimdBoxNanSpreads lb, rb;
+        auto select = [](__m128 mask, __m128 ifSet, __m128 ifClear) {  // SSE2: no blendv in the baseline ISA
+            return _mm_or_ps(_mm_and_ps(mask, ifSet), _mm_andnot_ps(mask, ifClear));
+        };
+        uint32_t l = r.begin;
+        for (uint32_t i = r.begin; i < r.end; ++i) {
+            const __m128 p0 = _mm_loadu_ps(refs_[i].lower), p1 = _mm_loadu_ps(refs_[i].upper);
+            const __m128 lo = xyz(p0), up = xyz(p1);
+            const uint32_t toLeft = goesLeft(lo, up);
+            const __m128 side = _mm_castsi128_ps(_mm_set1_epi32(-int32_t(toLeft)));  // all ones: left
+            lb.lower = select(side, _mm_min_ps(lb.lower, lo), lb.lower);
+            lb.upper = select(side, _mm_max_ps(lb.upper, up), lb.upper);
+            rb.lower = select(side, rb.lower, _mm_min_ps(rb.lower, lo));
+            rb.upper = select(side, rb.upper, _mm_max_ps(rb.upper, up));
+            const __m128 q0 = _mm_loadu_ps(refs_[l].lower), q1 = _mm_loadu_ps(refs_[l].upper);
+            _mm_storeu_ps(refs_[i].lower, q0), _mm_storeu_ps(refs_[i].upper, q1);
+            _mm_storeu_ps(refs_[l].lower, p0), _mm_storeu_ps(refs_[l].upper, p1);
+            l += toLeft;
+        }
+        left.begin = r.begin, left.end = l;
+        right.begin = l, right.end = r.end;
+        left.depth = right.depth = r.depth + 1;
+        left.bounds = lb.aabb();
+        right.bounds = rb.aabb();
+    }
+
     static constexpr uint32_t kPartitionChunk = 16384;
 
     template <typename Fn>
@@ -324,11 +397,15 @@ private:
         parallelFor(parallel_, chunks, fn);
     }
 
-    // A large range is partitioned stably (each side keeps its order) through the spare array, in fixed chunks that
-    // threads can share: the order depends on the chunks, never on the threads, and the top of the tree, where every
-    // range is large, is not serial. spare_[i] is only used for i in the range: disjoint ranges never collide.
+    // A large range is partitioned stably (each side keeps its order) from the array it is in into the other one (the
+    // refs array and the spare array take turns, so no pass copies a side back), in fixed chunks that threads can
+    // share: the order depends on the chunks, never on the threads, and the top of the tree, where every range is
+    // large, is not serial. Index i of either array is only used by the range that holds i: disjoint ranges never
+    // collide.
     template <typename GoesLeft, typename Add>
     void stablePartition(const Range& r, const GoesLeft& goesLeft, const Add& add, Range& left, Range& right) {
+        const PrimRef* from = at(r);
+        PrimRef* to = r.inSpare ? refs_ : spare_;
         const uint32_t chunks = (r.count() + kPartitionChunk - 1) / kPartitionChunk;
         struct Side {
             uint32_t leftCount = 0, leftAt = 0, rightAt = 0;
@@ -341,7 +418,7 @@ private:
             Side& side = sides[c];
             for (uint32_t i = chunkBegin(c); i < chunkEnd(c); ++i) {
                 __m128 lo, up;
-                load(refs_[i], lo, up);
+                load(from[i], lo, up);
                 if (goesLeft(lo, up)) {
                     add(side.lb, lo, up);
                     ++side.leftCount;
@@ -361,18 +438,16 @@ private:
             uint32_t l = sides[c].leftAt, rr = sides[c].rightAt;
             for (uint32_t i = chunkBegin(c); i < chunkEnd(c); ++i) {
                 __m128 lo, up;
-                load(refs_[i], lo, up);
-                spare_[goesLeft(lo, up) ? l++ : rr++] = refs_[i];
+                load(from[i], lo, up);
+                to[goesLeft(lo, up) ? l++ : rr++] = from[i];
             }
-        });
-        runChunks(chunks, [&](uint32_t c) {
-            std::copy(spare_ + chunkBegin(c), spare_ + chunkEnd(c), refs_ + chunkBegin(c));
         });
         RangeBounds lb, rb;
         for (const Side& side : sides) lb.merge(side.lb), rb.merge(side.rb);
         left.begin = r.begin, left.end = r.begin + leftTotal;
         right.begin = left.end, right.end = r.end;
         left.depth = right.depth = r.depth + 1;
+        left.inSpare = right.inSpare = !r.inSpare;
         left.bounds = lb.bounds.aabb();
         right.bounds = rb.bounds.aabb();
     }
@@ -407,8 +482,10 @@ void buildSubtree(PrimRef* refs, PrimRef* spare, const Range& r, const BvhBuildS
                   const ParallelFor& parallel, Subtree& out) {
     if (r.count() <= kParallelGrain) {
         out.nodes.reserve(r.count() / 8 + 4);
+        Range local = r;
+        if (local.inSpare) std::copy(spare + r.begin, spare + r.end, refs + r.begin), local.inSpare = false;
         WideBuilder builder(refs, settings, &out.nodes);
-        out.root = builder.build(r);
+        out.root = builder.build(local);
         out.totalNodes = out.nodes.size();
         return;
     }

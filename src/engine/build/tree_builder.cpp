@@ -15,6 +15,7 @@ BvhBuildSettings buildSettingsFor(uint32_t maxLeafSize, uint32_t buildFlags) {
         maxLeafSize == format::kMaxInstancesPerLeaf)
         s.fewBinsBelow = 0;
     if ((buildFlags & VK_BUILD_ACCELERATION_STRUCTURE_PREFER_FAST_TRACE_BIT_KHR) && !s.morton) s.quality = true;
+    if (!s.morton && !s.quality && maxLeafSize != format::kMaxInstancesPerLeaf) s.binSampleTarget = kDefaultBinSampleTarget;
     return s;
 }
 

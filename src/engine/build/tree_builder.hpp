@@ -31,11 +31,19 @@ inline void setPrimRef(PrimRef& ref, uint32_t index, const Aabb& b) {
     ref.pad = 0;
 }
 
+// The sample the default build bins in a large range (BvhBuildSettings::binSampleTarget): chosen by the SAH cost and
+// build time of the bench meshes (docs/PERFORMANCE.md, "Sampled binning").
+constexpr uint32_t kDefaultBinSampleTarget = 1024;
+
 struct BvhBuildSettings {
     uint32_t maxLeafSize;        // ranges of at most this many primitives become leaves
     uint32_t binCount = 32;      // SAH bins per axis (at most 32)
     uint32_t fewBinsBelow = 4096;  // ranges of fewer primitives get 8 bins (faster, about 1% more SAH cost); 0: never
     bool largestAxisOnly = false;  // bin only along the axis of the largest extent (faster, coarser)
+    // Ranges of at least twice this many primitives bin an evenly strided sample of about this many of them (the
+    // split is chosen from the sample; the children's bounds are still every primitive's): the top of a large tree
+    // is found at a fraction of the cost. 0: every primitive is binned.
+    uint32_t binSampleTarget = 0;
     bool morton = false;  // build with the Morton-code builder (morton_builder.hpp) instead of the SAH
     bool quality = false;  // build with the quality builder (quality_builder.hpp): binary SAH, optimal collapse
 };
@@ -43,7 +51,8 @@ struct BvhBuildSettings {
 // The settings a build's flags ask for: PREFER_FAST_BUILD the Morton-code builder (several times faster, a somewhat
 // coarser tree); PREFER_FAST_TRACE the quality builder (a better tree, several times slower to build); everything
 // else the binned SAH, with 32 bins at every size for PREFER_FAST_TRACE and for top levels (an instance costs a whole
-// bottom-level traversal, and instance counts are small).
+// bottom-level traversal, and instance counts are small), and sampled binning of large ranges for the default
+// bottom-level build.
 BvhBuildSettings buildSettingsFor(uint32_t maxLeafSize, uint32_t buildFlags);
 
 struct BvhBuildResult {
