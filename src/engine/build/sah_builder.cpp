@@ -334,22 +334,9 @@ private:
         // bounds gathered on the way (merged in chunk order: the same bytes with threads or without).
         auto add = [](RangeBounds& side, __m128 lo, __m128 up) { side.bounds.extend(lo, up); };
         if (spare_ && r.count() >= kStablePartitionMin) return stablePartition(r, goesLeft, add, left, right);
-        if (stride > 1) return partitionWithBounds(r, goesLeft, left, right);
-        // In place, without branches on the side (which is close to random near the leaves): every primitive is
-        // swapped with the first one not known to go left, which moves it there if it goes left and leaves the
-        // order of [begin, l) left, [l, i) right otherwise. The bounds come from the bins.
-        uint32_t l = r.begin;
-        for (uint32_t i = r.begin; i < r.end; ++i) {
-            const __m128 p0 = _mm_loadu_ps(refs_[i].lower), p1 = _mm_loadu_ps(refs_[i].upper);
-            const uint32_t toLeft = goesLeft(xyz(p0), xyz(p1));
-            const __m128 q0 = _mm_loadu_ps(refs_[l].lower), q1 = _mm_loadu_ps(refs_[l].upper);
-            _mm_storeu_ps(refs_[i].lower, q0), _mm_storeu_ps(refs_[i].upper, q1);
-            _mm_storeu_ps(refs_[l].lower, p0), _mm_storeu_ps(refs_[l].upper, p1);
-            l += toLeft;
-        }
-        left.begin = r.begin, left.end = l;
-        right.begin = l, right.end = r.end;
-        left.depth = right.depth = r.depth + 1;
+        // In place. The bounds come from the bins, unless the bins saw only a sample.
+        if (stride > 1) return partitionInPlace<true>(r, goesLeft, left, right);
+        partitionInPlace<false>(r, goesLeft, left, right);
         left.bounds = leftBox.aabb();
         right.bounds = rightBox.aabb();
     }
@@ -360,10 +347,13 @@ private:
         return target != 0 && count >= 2 * target ? count / target : 1;
     }
 
-    // The in-place partition of split, for a range whose bins saw only a sample: each side's bounds are gathered on
-    // the way (each primitive extends its own side's box, exactly as RangeBounds::extend would), without branches.
-    template <typename GoesLeft>
-    void partitionWithBounds(const Range& r, const GoesLeft& goesLeft, Range& left, Range& right) {
+    // The in-place partition of split, without branches on the side (which is close to random near the leaves):
+    // every primitive is swapped with the first one not known to go left, which moves it there if it goes left and
+    // leaves the order of [begin, l) left, [l, i) right otherwise. With kGatherBounds (a range whose bins saw only a
+    // sample), each side's bounds are gathered on the way, each primitive extending its own side's box exactly as
+    // RangeBounds::extend would; otherwise the caller takes them from the bins.
+    template <bool kGatherBounds, typename GoesLeft>
+    void partitionInPlace(const Range& r, const GoesLeft& goesLeft, Range& left, Range& right) {
         SimdBoxNanSpreads lb, rb;
         auto select = [](__m128 mask, __m128 ifSet, __m128 ifClear) {  // SSE2: no blendv in the baseline ISA
             return _mm_or_ps(_mm_and_ps(mask, ifSet), _mm_andnot_ps(mask, ifClear));
@@ -373,11 +363,13 @@ private:
             const __m128 p0 = _mm_loadu_ps(refs_[i].lower), p1 = _mm_loadu_ps(refs_[i].upper);
             const __m128 lo = xyz(p0), up = xyz(p1);
             const uint32_t toLeft = goesLeft(lo, up);
-            const __m128 side = _mm_castsi128_ps(_mm_set1_epi32(-int32_t(toLeft)));  // all ones: left
-            lb.lower = select(side, _mm_min_ps(lb.lower, lo), lb.lower);
-            lb.upper = select(side, _mm_max_ps(lb.upper, up), lb.upper);
-            rb.lower = select(side, rb.lower, _mm_min_ps(rb.lower, lo));
-            rb.upper = select(side, rb.upper, _mm_max_ps(rb.upper, up));
+            if constexpr (kGatherBounds) {
+                const __m128 side = _mm_castsi128_ps(_mm_set1_epi32(-int32_t(toLeft)));  // all ones: left
+                lb.lower = select(side, _mm_min_ps(lb.lower, lo), lb.lower);
+                lb.upper = select(side, _mm_max_ps(lb.upper, up), lb.upper);
+                rb.lower = select(side, rb.lower, _mm_min_ps(rb.lower, lo));
+                rb.upper = select(side, rb.upper, _mm_max_ps(rb.upper, up));
+            }
             const __m128 q0 = _mm_loadu_ps(refs_[l].lower), q1 = _mm_loadu_ps(refs_[l].upper);
             _mm_storeu_ps(refs_[i].lower, q0), _mm_storeu_ps(refs_[i].upper, q1);
             _mm_storeu_ps(refs_[l].lower, p0), _mm_storeu_ps(refs_[l].upper, p1);
@@ -386,8 +378,7 @@ private:
         left.begin = r.begin, left.end = l;
         right.begin = l, right.end = r.end;
         left.depth = right.depth = r.depth + 1;
-        left.bounds = lb.aabb();
-        right.bounds = rb.aabb();
+        if constexpr (kGatherBounds) left.bounds = lb.aabb(), right.bounds = rb.aabb();
     }
 
     static constexpr uint32_t kPartitionChunk = 16384;
@@ -482,10 +473,9 @@ void buildSubtree(PrimRef* refs, PrimRef* spare, const Range& r, const BvhBuildS
                   const ParallelFor& parallel, Subtree& out) {
     if (r.count() <= kParallelGrain) {
         out.nodes.reserve(r.count() / 8 + 4);
-        Range local = r;
-        if (local.inSpare) std::copy(spare + r.begin, spare + r.end, refs + r.begin), local.inSpare = false;
         WideBuilder builder(refs, settings, &out.nodes);
-        out.root = builder.build(local);
+        builder.useSpare(spare);  // only for a range a stable partition left there, which goes back first (split)
+        out.root = builder.build(r);
         out.totalNodes = out.nodes.size();
         return;
     }
