@@ -13,6 +13,11 @@
 
 namespace vkas {
 
+namespace {
+// The batch whose item this thread is running (nullptr: none, or a task of start()): the parent of what it spreads.
+thread_local void* tCurrentBatch = nullptr;
+}  // namespace
+
 DeferredOperation::DeferredOperation() {
     parallelFor_ = [this](uint32_t count, FunctionRef<void(uint32_t)> fn) { spread(count, fn); };
 }
@@ -21,27 +26,29 @@ void DeferredOperation::setHostMemory(const VkAllocationCallbacks& callbacks) {
     state_ = CallbacksResource(callbacks, VK_SYSTEM_ALLOCATION_SCOPE_OBJECT);
     work_ = CallbacksResource(callbacks, VK_SYSTEM_ALLOCATION_SCOPE_COMMAND);
     tasks_ = HostVector<Task>(HostAllocator<Task>(stateMemory()));
-    queue_ = HostVector<Item>(HostAllocator<Item>(stateMemory()));
+    open_ = HostVector<Batch*>(HostAllocator<Batch*>(stateMemory()));
 }
 
 void DeferredOperation::spread(uint32_t count, FunctionRef<void(uint32_t)> fn) {
     if (count == 0) return;
     // A call that throws (out of memory), or queueing that fails, is recorded and rethrown here, on the calling
     // thread, once every queued call has finished: nothing queued is left referring to the batch (on this stack).
-    Batch batch{fn, count, nullptr};
+    Batch batch{fn, count, 0, count, static_cast<Batch*>(tCurrentBatch), nullptr};
     std::unique_lock<std::mutex> lock(mutex_);
     try {
-        queue_.reserve(queue_.size() + count);
-        for (uint32_t i = 0; i < count; ++i) queue_.push_back(Item{&batch, i});
+        open_.push_back(&batch);
     } catch (...) {
-        batch.left = 0;  // nothing queued: the reserve failed before any push
+        batch.left = 0;  // nothing queued
         batch.error = std::current_exception();
     }
     changed_.notify_all();
-    // Help: run queued items (ours or others') until all of ours have run.
+    // Help until all of ours have run, but only with our own items and those spread below them: an unrelated item
+    // (another part of the build, which may be long) would hold up the rest of the work that waits for this batch,
+    // which is on the critical path when the batch is the top of a tree.
+    Item item;
     while (batch.left > 0) {
-        if (!queueEmpty())
-            runOne(lock);
+        if (take(&batch, item))
+            run(item, lock);
         else
             changed_.wait(lock);
     }
@@ -56,10 +63,8 @@ void DeferredOperation::start(HostVector<Task> tasks, Finish finish, uint32_t co
     // Everything that allocates comes first: a start that throws (out of memory) leaves the operation as it was.
     // A task that throws makes the operation's result VK_ERROR_OUT_OF_HOST_MEMORY (currentExceptionResult).
     std::lock_guard<std::mutex> lock(mutex_);
-    queue_.clear();  // the operation was complete: nothing is queued
-    head_ = 0;
-    queue_.reserve(tasks.size());
-    for (uint32_t i = 0; i < tasks.size(); ++i) queue_.push_back(Item{nullptr, i});
+    open_.clear();  // the operation was complete: nothing is queued
+    nextTask_ = 0;
     tasks_ = std::move(tasks);
     pending_ = true;
     finishing_ = false;
@@ -70,16 +75,30 @@ void DeferredOperation::start(HostVector<Task> tasks, Finish finish, uint32_t co
     topLevelLeft_ = uint32_t(tasks_.size());
 }
 
-void DeferredOperation::runOne(std::unique_lock<std::mutex>& lock) {
-    const Item item = queue_[head_++];
-    if (queueEmpty()) {
-        queue_.clear();
-        head_ = 0;
+bool DeferredOperation::take(const Batch* waiting, Item& item) {
+    if (!waiting && nextTask_ < tasks_.size()) {
+        item = Item{nullptr, uint32_t(nextTask_++)};
+        return true;
     }
+    for (size_t k = 0; k < open_.size(); ++k) {
+        Batch* b = open_[k];
+        bool below = waiting == nullptr;  // a joined thread takes anything; a waiting one, only its batch's descendants
+        for (const Batch* a = b; a && !below; a = a->parent) below = a == waiting;
+        if (!below) continue;
+        item = Item{b, b->next++};
+        if (b->next == b->count) open_.erase(open_.begin() + ptrdiff_t(k));
+        return true;
+    }
+    return false;
+}
+
+void DeferredOperation::run(Item item, std::unique_lock<std::mutex>& lock) {
     ++running_;
     lock.unlock();
     std::exception_ptr error;
     VkResult failure = VK_SUCCESS;
+    void* const outer = tCurrentBatch;
+    tCurrentBatch = item.batch;
     {
         ScopedHostMemory memory(workMemory());  // the engine's temporaries while this thread works for the operation
         try {
@@ -94,6 +113,7 @@ void DeferredOperation::runOne(std::unique_lock<std::mutex>& lock) {
                 failure = currentExceptionResult();
         }
     }
+    tCurrentBatch = outer;
     lock.lock();
     if (item.batch) {
         if (error && !item.batch->error) item.batch->error = error;
@@ -109,10 +129,11 @@ void DeferredOperation::runOne(std::unique_lock<std::mutex>& lock) {
 VkResult DeferredOperation::join() {
     std::unique_lock<std::mutex> lock(mutex_);
     bool waited = false;
+    Item item;
     for (;;) {
         if (!pending_) return VK_SUCCESS;
-        if (!queueEmpty()) {
-            runOne(lock);
+        if (take(nullptr, item)) {
+            run(item, lock);
             continue;
         }
         if (running_ == 0 && topLevelLeft_ == 0 && !finishing_) {
@@ -131,6 +152,7 @@ VkResult DeferredOperation::join() {
             pending_ = false;
             finish_ = nullptr;
             tasks_.clear();  // the command's captured work, freed (the list keeps its capacity)
+            nextTask_ = 0;
             changed_.notify_all();
             return VK_SUCCESS;
         }
@@ -140,7 +162,7 @@ VkResult DeferredOperation::join() {
         if (topLevelLeft_ > 0 && !waited) {
             waited = true;
             changed_.wait_for(lock, std::chrono::milliseconds(1), [this] {
-                return !pending_ || !queueEmpty() || (running_ == 0 && topLevelLeft_ == 0);
+                return !pending_ || hasWork() || (running_ == 0 && topLevelLeft_ == 0);
             });
             continue;
         }
@@ -151,7 +173,9 @@ VkResult DeferredOperation::join() {
 uint32_t DeferredOperation::maxConcurrency() {
     std::lock_guard<std::mutex> lock(mutex_);
     if (!pending_) return 0;
-    return std::max({1u, concurrencyHint_, uint32_t(queue_.size() - head_) + running_});
+    uint32_t waiting = uint32_t(tasks_.size() - nextTask_);
+    for (const Batch* b : open_) waiting += b->count - b->next;
+    return std::max({1u, concurrencyHint_, waiting + running_});
 }
 
 VkResult DeferredOperation::result() {

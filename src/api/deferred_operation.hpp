@@ -55,29 +55,35 @@ public:
     const ParallelFor& parallelFor() const { return parallelFor_; }
 
 private:
-    // What parallelFor spreads: fn(0..left) for one caller, which waits on its own stack until all ran.
+    // What parallelFor spreads: fn(0..count) for one caller, which waits on its own stack until all ran. `parent` is
+    // the batch whose item the caller was running when it spread this one (nullptr: a task of start()).
     struct Batch {
         FunctionRef<void(uint32_t)> fn;
-        uint32_t left;
+        uint32_t count;
+        uint32_t next = 0;  // fn(next..count) are not handed out yet
+        uint32_t left;      // not finished yet
+        Batch* parent;
         std::exception_ptr error;
     };
-    // A queued piece of work: task `index` of start() (batch == nullptr) or fn(index) of a batch.
+    // A piece of work handed out: task `index` of start() (batch == nullptr) or fn(index) of a batch.
     struct Item {
         Batch* batch;
         uint32_t index;
     };
 
     void spread(uint32_t count, FunctionRef<void(uint32_t)> fn);
-    bool queueEmpty() const { return head_ == queue_.size(); }
-    // Runs one queued item with the lock released. Returns with the lock held.
-    void runOne(std::unique_lock<std::mutex>& lock);
+    bool hasWork() const { return nextTask_ < tasks_.size() || !open_.empty(); }
+    // Hands out the next item for a thread that waits on `waiting` (nullptr: a joined thread that waits on nothing).
+    bool take(const Batch* waiting, Item& item);
+    // Runs the item with the lock released. Returns with the lock held.
+    void run(Item item, std::unique_lock<std::mutex>& lock);
 
     CallbacksResource state_, work_;
     std::mutex mutex_;
     std::condition_variable changed_;
     HostVector<Task> tasks_;
-    HostVector<Item> queue_;  // items before head_ have been handed out; emptied (capacity kept) when all were
-    size_t head_ = 0;
+    size_t nextTask_ = 0;        // tasks_[nextTask_..] are not handed out yet
+    HostVector<Batch*> open_;    // the batches with items not handed out, oldest first
     uint32_t running_ = 0;       // items being run right now
     uint32_t topLevelLeft_ = 0;  // tasks given to start() not finished yet: they may still spread work
     bool pending_ = false;

@@ -5,7 +5,10 @@
 #include <algorithm>
 #include <atomic>
 #include <cstring>
+#include <string>
 #include <thread>
+
+#include "api/deferred_operation.hpp"
 
 #include "meshes.hpp"
 #include "vkas_test.hpp"
@@ -435,5 +438,82 @@ TEST_F(host_threading, serialized_bytes_independent_of_threads_for_every_geometr
         EXPECT_TRUE(serializedBytes(b->as) == expectedTlas) << "top level, " << threads << " joined threads";
     }
     vkDestroyDeferredOperationKHR(device, op, nullptr);
+    EXPECT_TRUE(takeValidationErrors().empty());
+}
+
+// The order in which the joined threads are handed the work of an operation (api/deferred_operation.hpp), seen on
+// one joined thread: a thread that waits for the items it spread runs only those and the items spread below them,
+// never another task's or a sibling's, which would hold up the rest of the work waiting for it. `spreads` says what
+// the operation's two tasks do; the log is what one joined thread ran, in order.
+namespace {
+std::vector<std::string> runOnOneThread(VkDevice device, VkDeferredOperationKHR handle,
+                                        PFN_vkDeferredOperationJoinKHR join, bool nested) {
+    auto* op = vkas::fromHandle<vkas::DeferredOperation>(handle);
+    std::vector<std::string> log;
+    const vkas::ParallelFor& spread = op->parallelFor();
+    {
+        vkas::ScopedHostMemory memory(op->stateMemory());
+        vkas::HostVector<vkas::DeferredOperation::Task> tasks;
+        tasks.emplace_back([&log, &spread, nested] {
+            log.push_back("task0");
+            spread(2, [&](uint32_t i) {
+                log.push_back("x" + std::to_string(i));
+                if (nested && i == 0) {
+                    spread(2, [&](uint32_t j) { log.push_back("y" + std::to_string(j)); });
+                    log.push_back("x0 done");
+                }
+            });
+        });
+        tasks.emplace_back([&log] { log.push_back("task1"); });
+        op->start(std::move(tasks), [] { return VK_SUCCESS; }, 1);
+    }
+    VkResult r;
+    while ((r = join(device, handle)) == VK_THREAD_IDLE_KHR) {}
+    EXPECT_EQ(r, VK_SUCCESS);
+    return log;
+}
+}  // namespace
+
+TEST_F(host_threading, waiting_thread_runs_only_work_below_it) {
+    VkDeferredOperationKHR op = createOperation();
+    // Before, the waiting thread took the next queued item: task1 ran inside task0's spread, and x1 inside x0's.
+    EXPECT_EQ(runOnOneThread(device, op, vkDeferredOperationJoinKHR, false),
+              (std::vector<std::string>{"task0", "x0", "x1", "task1"}));
+    EXPECT_EQ(runOnOneThread(device, op, vkDeferredOperationJoinKHR, true),
+              (std::vector<std::string>{"task0", "x0", "y0", "y1", "x0 done", "x1", "task1"}));
+    vkDestroyDeferredOperationKHR(device, op, nullptr);
+    EXPECT_TRUE(takeValidationErrors().empty());
+}
+
+// Nested spreads three deep, of random widths, joined by 4 threads: every item runs exactly once and the operation
+// completes (a waiting thread that may not help elsewhere must never wait for work nobody can take).
+TEST_F(host_threading, nested_spreads_complete_on_joined_threads) {
+    VkDeferredOperationKHR handle = createOperation();
+    auto* op = vkas::fromHandle<vkas::DeferredOperation>(handle);
+    const vkas::ParallelFor& spread = op->parallelFor();
+    for (int round = 0; round < 20; ++round) {
+        const uint32_t w0 = 1 + rng.below(8), w1 = 1 + rng.below(8), w2 = 1 + rng.below(8);
+        std::atomic<uint32_t> leaves{0};
+        {
+            vkas::ScopedHostMemory memory(op->stateMemory());
+            vkas::HostVector<vkas::DeferredOperation::Task> tasks;
+            for (int t = 0; t < 3; ++t)
+                tasks.emplace_back([&] {
+                    spread(w0, [&](uint32_t) {
+                        spread(w1, [&](uint32_t) { spread(w2, [&](uint32_t) { ++leaves; }); });
+                    });
+                });
+            op->start(std::move(tasks), [] { return VK_SUCCESS; }, 1);
+        }
+        std::vector<std::thread> pool;
+        for (int t = 0; t < 4; ++t)
+            pool.emplace_back([&] {
+                while (vkDeferredOperationJoinKHR(device, handle) == VK_THREAD_IDLE_KHR) std::this_thread::yield();
+            });
+        for (auto& th : pool) th.join();
+        ASSERT_EQ(leaves.load(), 3 * w0 * w1 * w2) << "round " << round;
+        ASSERT_EQ(vkGetDeferredOperationResultKHR(device, handle), VK_SUCCESS);
+    }
+    vkDestroyDeferredOperationKHR(device, handle, nullptr);
     EXPECT_TRUE(takeValidationErrors().empty());
 }
