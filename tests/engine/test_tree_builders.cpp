@@ -37,7 +37,8 @@ struct TreeBuilders : ::testing::Test {
         for (uint32_t i = 0; i < n; ++i) {
             Aabb b;
             Vec3 c{rng.uniformf(-100, 100), rng.uniformf(-100, 100), rng.uniformf(-100, 100)};
-            if (mode == 1) c = Vec3{float(rng.below(4)), float(rng.below(4)), 0.0f};  // many duplicates
+            // many duplicates, and zeros of both signs (which a union's order could tell apart)
+            if (mode == 1) c = Vec3{float(rng.below(4)), float(rng.below(4)), rng.coin() ? 0.0f : -0.0f};
             const float s = mode == 2 ? 0.0f : rng.uniformf(0.0f, 5.0f);
             b.extend(c);
             b.extend(Vec3{c.x + s, c.y + rng.uniformf(0.0f, s + 1e-3f), c.z});
@@ -145,6 +146,7 @@ TEST_F(TreeBuilders, both_builders_keep_the_output_contract_and_ignore_threading
                 const Built threaded = build(refs, settings, &kFourThreads);
                 ASSERT_EQ(threaded.result.nodeCount, serial.result.nodeCount);
                 EXPECT_EQ(threaded.result.root, serial.result.root);
+                EXPECT_EQ(std::memcmp(&threaded.result.bounds, &serial.result.bounds, sizeof(Aabb)), 0);
                 // (empty vectors may have null data, which memcmp must not get)
                 EXPECT_TRUE(serial.nodes.empty() || std::memcmp(threaded.nodes.data(), serial.nodes.data(),
                                                                 serial.nodes.size() * sizeof(Node)) == 0);

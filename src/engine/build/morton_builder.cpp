@@ -9,6 +9,7 @@
 #include <memory>
 #include <vector>
 
+#include "engine/util/parallel_for.hpp"
 #include "engine/util/simd_box.hpp"
 
 namespace vkas {
@@ -80,6 +81,14 @@ struct InputBounds {
             centroidLower = _mm_min_ps(centroidLower, select(finite, c, inf));
             centroidUpper = _mm_max_ps(centroidUpper, select(finite, c, negInf));
         }
+    }
+    // The bounds of the primitives after these (a later chunk), with the operands in add's order: the same bytes
+    // as one add over both, zeros of either sign included (min and max return their second operand on a tie).
+    void merge(const InputBounds& later) {
+        lower = _mm_min_ps(later.lower, lower);
+        upper = _mm_max_ps(later.upper, upper);
+        centroidLower = _mm_min_ps(centroidLower, later.centroidLower);
+        centroidUpper = _mm_max_ps(centroidUpper, later.centroidUpper);
     }
 };
 
@@ -190,7 +199,8 @@ struct Range {
 };
 
 // Builds the tree top-down over the sorted keys; bounds come back up from the leaves. Leaves copy their sorted
-// references into the output array (the contract: leaves are ranges of refs).
+// references into the output array (the contract: leaves are ranges of refs). Nodes are numbered in preorder from
+// nodeBase (0, or where a part of a parallel build begins) and written to nodes[number].
 class TreeWriter {
 public:
     // bucketBegin[d]: the first key whose top digit is d or more (the sort's buckets; d up to 2^kTopBits).
@@ -201,11 +211,28 @@ public:
 
     ChildRef build(const Range& r, SimdBoxNanSpreads& box) {
         if (r.count() <= maxLeafSize_) return leaf(r, box);
-        const uint32_t index = nodeCount_++;
-        // The node's range is its only child at first; the child of most primitives is split until there are 8
-        // children or every child is a leaf. So every node has 8 children or only leaf children (the node-count
-        // bound of docs/FORMAT.md), and it always splits its own range at least once (no endless recursion).
+        const uint32_t index = nodeBase_ + nodeCount_++;
         Range children[format::kNodeWidth];
+        const uint32_t n = childRanges(r, children);
+        Node node;
+        for (uint32_t i = 0; i < format::kNodeWidth; ++i) {
+            SimdBoxNanSpreads child;
+            node.child[i] = format::kEmptyRef;
+            if (i < n) {
+                node.child[i] = build(children[i], child);
+                box.extend(child);
+            }
+            setSlot(node, i, child);
+        }
+        nodes_[index] = node;
+        return format::makeInternalRef(index);
+    }
+
+    // The children of a node over r (more than a leaf), in slot order; returns how many. The node's range is its
+    // only child at first; the child of most primitives is split until there are 8 children or every child is a
+    // leaf. So every node has 8 children or only leaf children (the node-count bound of docs/FORMAT.md), and it
+    // always splits its own range at least once (no endless recursion).
+    uint32_t childRanges(const Range& r, Range (&children)[format::kNodeWidth]) const {
         uint32_t n = 1;
         children[0] = r;
         while (n < format::kNodeWidth) {
@@ -220,27 +247,37 @@ public:
         // Slots in range order: the depth-first build then visits the leaves in array order (streaming reads
         // and writes), and a node's subtrees lie in the order of their primitives.
         std::sort(children, children + n, [](const Range& a, const Range& b) { return a.begin < b.begin; });
-        Node node;
-        alignas(16) float lo[4], up[4];
-        for (uint32_t i = 0; i < format::kNodeWidth; ++i) {
-            SimdBoxNanSpreads child;
-            node.child[i] = format::kEmptyRef;
-            if (i < n) {
-                node.child[i] = build(children[i], child);
-                box.extend(child);
-            }
-            _mm_store_ps(lo, child.lower);
-            _mm_store_ps(up, child.upper);
-            node.lowerX[i] = lo[0], node.lowerY[i] = lo[1], node.lowerZ[i] = lo[2];
-            node.upperX[i] = up[0], node.upperY[i] = up[1], node.upperZ[i] = up[2];
-        }
-        nodes_[index] = node;
-        return format::makeInternalRef(index);
+        return n;
     }
 
-    uint32_t nodeCount() const { return nodeCount_; }
+    // Slot i of `node` gets box b.
+    static void setSlot(Node& node, uint32_t i, const SimdBoxNanSpreads& b) {
+        alignas(16) float lo[4], up[4];
+        _mm_store_ps(lo, b.lower);
+        _mm_store_ps(up, b.upper);
+        node.lowerX[i] = lo[0], node.lowerY[i] = lo[1], node.lowerZ[i] = lo[2];
+        node.upperX[i] = up[0], node.upperY[i] = up[1], node.upperZ[i] = up[2];
+    }
 
-private:
+    uint32_t maxLeafSize() const { return maxLeafSize_; }
+
+    // A writer over the same sorted keys for one part of a parallel build, whose nodes are numbered from nodeBase.
+    TreeWriter forPart(uint32_t nodeBase) const {
+        TreeWriter part = *this;
+        part.nodeBase_ = nodeBase, part.nodeCount_ = 0;
+        return part;
+    }
+
+    // The nodes build(r) writes (r: more than a leaf), from the same splits without writing anything.
+    uint32_t countNodes(const Range& r) const {
+        Range children[format::kNodeWidth];
+        const uint32_t n = childRanges(r, children);
+        uint32_t total = 1;
+        for (uint32_t i = 0; i < n; ++i)
+            if (children[i].count() > maxLeafSize_) total += countNodes(children[i]);
+        return total;
+    }
+
     ChildRef leaf(const Range& r, SimdBoxNanSpreads& box) {
         for (uint32_t i = r.begin; i < r.end; ++i) {
             __m128 lo, up;
@@ -250,6 +287,10 @@ private:
         }
         return format::makeLeafRef(r.begin, r.count());
     }
+
+    uint32_t nodeCount() const { return nodeCount_; }
+
+private:
 
     // Splits where the highest bit that differs between the range's first and last code turns to 1 (the codes
     // are sorted, so a binary search finds it). Identical codes, and every range below binary split depth
@@ -289,17 +330,146 @@ private:
     PrimRef* out_;
     Node* nodes_;
     uint32_t maxLeafSize_;
+    uint32_t nodeBase_ = 0;
     uint32_t nodeCount_ = 0;
 };
+
+// A tree built on several threads: the top, down to ranges of at most partMax primitives, is planned here (the
+// splits depend on the keys alone); each such range (a part) counts its nodes, which gives every part its place in
+// preorder; each part is built by its own TreeWriter straight into its place; then the top's nodes are written.
+// Node indices, slot boxes and unions come out as the serial TreeWriter makes them: a part's subtree is built by the
+// same code, its nodes are contiguous in preorder, and every box is extended in the same order.
+class ParallelTree {
+public:
+    ParallelTree(TreeWriter& top, const ParallelFor& parallel) : top_(top), parallel_(parallel) {}
+
+    BvhBuildResult build(const Range& all, uint32_t partMax, Node* nodes) {
+        partMax_ = partMax;
+        plan(all);
+        partNodes_.resize(parts_.size());
+        partBoxes_.resize(parts_.size());
+        partBase_.resize(parts_.size());
+        parallelFor(&parallel_, uint32_t(parts_.size()), [&](uint32_t p) { partNodes_[p] = top_.countNodes(parts_[p]); });
+        placeParts(0);
+        parallelFor(&parallel_, uint32_t(parts_.size()), [&](uint32_t p) {
+            TreeWriter writer = top_.forPart(partBase_[p]);
+            writer.build(parts_[p], partBoxes_[p]);
+        });
+        nodes_ = nodes;
+        next_ = 0;
+        BvhBuildResult result;
+        SimdBoxNanSpreads box;
+        result.root = writeTop(0, box);
+        result.nodeCount = total_;
+        return result;
+    }
+
+private:
+    static constexpr uint32_t kLeaf = UINT32_MAX, kPart = UINT32_MAX - 1;
+    // A node of the top: its children's ranges and, per child, the top node that continues it, kLeaf, or kPart
+    // (parts_[part[i]]).
+    struct TopNode {
+        Range children[format::kNodeWidth];
+        uint32_t n;
+        uint32_t next[format::kNodeWidth];
+        uint32_t part[format::kNodeWidth];
+    };
+
+    // Plans the node over r (more than partMax primitives); returns its index in tops_.
+    uint32_t plan(const Range& r) {
+        const uint32_t self = uint32_t(tops_.size());
+        tops_.emplace_back();
+        TopNode t;
+        t.n = top_.childRanges(r, t.children);
+        for (uint32_t i = 0; i < t.n; ++i) {
+            const Range& c = t.children[i];
+            t.next[i] = kLeaf, t.part[i] = 0;
+            if (c.count() <= top_.maxLeafSize()) continue;
+            if (c.count() <= partMax_) {
+                t.next[i] = kPart, t.part[i] = uint32_t(parts_.size());
+                parts_.push_back(c);
+            } else {
+                t.next[i] = plan(c);
+            }
+        }
+        tops_[self] = t;
+        return self;
+    }
+
+    // The preorder numbers: top node t takes the next one, then its children's subtrees follow in slot order.
+    void placeParts(uint32_t t) {
+        const TopNode& top = tops_[t];
+        ++total_;
+        for (uint32_t i = 0; i < top.n; ++i) {
+            if (top.next[i] == kPart) {
+                partBase_[top.part[i]] = total_;
+                total_ += partNodes_[top.part[i]];
+            } else if (top.next[i] != kLeaf) {
+                placeParts(top.next[i]);
+            }
+        }
+    }
+
+    // Writes top node t (at the number placeParts gave it) and the top nodes below it; returns its reference.
+    ChildRef writeTop(uint32_t t, SimdBoxNanSpreads& box) {
+        const TopNode& top = tops_[t];
+        const uint32_t index = next_++;
+        Node node;
+        for (uint32_t i = 0; i < format::kNodeWidth; ++i) {
+            SimdBoxNanSpreads child;
+            node.child[i] = format::kEmptyRef;
+            if (i < top.n) {
+                if (top.next[i] == kLeaf) {
+                    node.child[i] = top_.leaf(top.children[i], child);
+                } else if (top.next[i] == kPart) {
+                    const uint32_t p = top.part[i];
+                    node.child[i] = format::makeInternalRef(partBase_[p]);  // more than a leaf: its root is a node
+                    child = partBoxes_[p];
+                    next_ += partNodes_[p];
+                } else {
+                    node.child[i] = writeTop(top.next[i], child);
+                }
+                box.extend(child);
+            }
+            TreeWriter::setSlot(node, i, child);
+        }
+        nodes_[index] = node;
+        return format::makeInternalRef(index);
+    }
+
+    TreeWriter& top_;
+    const ParallelFor& parallel_;
+    uint32_t partMax_ = 0;
+    HostVector<TopNode> tops_;
+    HostVector<Range> parts_;
+    HostVector<uint32_t> partNodes_;  // how many nodes each part writes
+    HostVector<SimdBoxNanSpreads> partBoxes_;
+    HostVector<uint32_t> partBase_;   // the number of each part's first node
+    Node* nodes_ = nullptr;
+    uint32_t total_ = 0, next_ = 0;
+};
+
+// Work over all primitives goes in chunks of this many (the same chunks with threads or without).
+constexpr uint32_t kChunk = 65536;
+// A parallel tree's parts hold at most max(kPartMin, n / kPartsAtLeast) primitives: about a hundred parts or more,
+// each worth a task.
+constexpr uint32_t kPartMin = 8192, kPartsAtLeast = 128;
 
 }  // namespace
 
 BvhBuildResult buildMortonBvh(PrimRef* refs, uint32_t n, uint32_t maxLeafSize, Node* nodes,
-                              std::byte* workspace, const ParallelFor* /*parallel: serial for now*/) {
+                              std::byte* workspace, const ParallelFor* parallel) {
     BvhBuildResult result;
     if (n == 0) return result;
-    InputBounds input;
-    input.add(refs, 0, n);
+    // Every pass runs over fixed chunks, on several threads when there are: keys are unique, so the sorted order
+    // is the same however it is reached, and the bounds merge in chunk order.
+    const uint32_t chunks = chunkCount(n, kChunk);
+    HostVector<InputBounds> chunkBounds(chunks);
+    parallelForChunks(parallel, n, kChunk, [&](uint32_t c, uint64_t begin, uint64_t end) {
+        chunkBounds[c].add(refs, uint32_t(begin), uint32_t(end));
+    });
+    InputBounds input = chunkBounds[0];
+    for (uint32_t c = 1; c < chunks; ++c) input.merge(chunkBounds[c]);
     result.bounds = SimdBoxNanSpreads{input.lower, input.upper}.aabb();
     if (n <= maxLeafSize) {
         result.root = format::makeLeafRef(0, n);
@@ -311,27 +481,56 @@ BvhBuildResult buildMortonBvh(PrimRef* refs, uint32_t n, uint32_t maxLeafSize, N
     // The workspace: the keys and the sort's second buffer (16 bytes a primitive), then the sorted PrimRefs.
     uint64_t* keys = reinterpret_cast<uint64_t*>(workspace);
     uint64_t* other = keys + n;
-    HostVector<uint32_t> topCount(1u << kTopBits, 0);
-    makeKeys(refs, 0, n, quant, layout, keys, topCount.data());
+    constexpr uint32_t kBuckets = 1u << kTopBits;
+    HostVector<uint32_t> chunkCounts(uint64_t(chunks) * kBuckets, 0);  // per chunk, the count of each top digit
+    parallelForChunks(parallel, n, kChunk, [&](uint32_t c, uint64_t begin, uint64_t end) {
+        makeKeys(refs, uint32_t(begin), uint32_t(end), quant, layout, keys, &chunkCounts[uint64_t(c) * kBuckets]);
+    });
 
-    // Scatter by the top digit into `other` (stable), then sort each bucket back into `keys`; the bucket's span of
-    // `other` is its second buffer once its keys are counted.
-    HostVector<uint32_t> bucketBegin(topCount.size() + 1, 0);
-    for (size_t d = 0; d < topCount.size(); ++d) bucketBegin[d + 1] = bucketBegin[d] + topCount[d];
-    {
-        HostVector<uint32_t> offset(bucketBegin.begin(), bucketBegin.end() - 1);
-        for (uint32_t i = 0; i < n; ++i) other[offset[layout.topDigit(keys[i])]++] = keys[i];
+    // Scatter by the top digit into `other` (stable: each chunk writes after the chunks before it in every
+    // bucket), then sort each bucket back into `keys`; the bucket's span of `other` is its second buffer once its
+    // keys are counted.
+    HostVector<uint32_t> bucketBegin(kBuckets + 1, 0);
+    for (uint32_t d = 0; d < kBuckets; ++d) {
+        uint32_t at = bucketBegin[d];
+        for (uint32_t c = 0; c < chunks; ++c) {
+            const uint32_t count = chunkCounts[uint64_t(c) * kBuckets + d];
+            chunkCounts[uint64_t(c) * kBuckets + d] = at;  // now where chunk c's keys of digit d go
+            at += count;
+        }
+        bucketBegin[d + 1] = at;
     }
-    for (size_t d = 0; d < topCount.size(); ++d) {
-        const uint32_t b = bucketBegin[d], count = topCount[d];
-        if (count) sortBucket(other + b, keys + b, other + b, count, layout);
-    }
+    parallelForChunks(parallel, n, kChunk, [&](uint32_t c, uint64_t begin, uint64_t end) {
+        uint32_t* offset = &chunkCounts[uint64_t(c) * kBuckets];
+        for (uint64_t i = begin; i < end; ++i) other[offset[layout.topDigit(keys[i])]++] = keys[i];
+    });
+    // The buckets in groups of about n / 256 keys (at least 4,096), a task each.
+    HostVector<uint32_t> groupBegin(1, 0);
+    const uint32_t groupTarget = std::max<uint32_t>(4096, n / 256);
+    for (uint32_t d = 0; d < kBuckets; ++d)
+        if (bucketBegin[d + 1] - bucketBegin[groupBegin.back()] >= groupTarget) groupBegin.push_back(d + 1);
+    if (groupBegin.back() != kBuckets) groupBegin.push_back(kBuckets);
+    parallelFor(parallel, uint32_t(groupBegin.size() - 1), [&](uint32_t g) {
+        for (uint32_t d = groupBegin[g]; d < groupBegin[g + 1]; ++d) {
+            const uint32_t b = bucketBegin[d], count = bucketBegin[d + 1] - b;
+            if (count) sortBucket(other + b, keys + b, other + b, count, layout);
+        }
+    });
     // The references in sorted order; the leaves copy them back into refs.
     PrimRef* sorted = reinterpret_cast<PrimRef*>(workspace + 16 * uint64_t(n));
     const uint64_t indexMask = layout.indexMask();
-    for (uint32_t i = 0; i < n; ++i) sorted[i] = refs[keys[i] & indexMask];
+    parallelForChunks(parallel, n, kChunk, [&](uint32_t, uint64_t begin, uint64_t end) {
+        for (uint64_t i = begin; i < end; ++i) sorted[i] = refs[keys[i] & indexMask];
+    });
 
     TreeWriter writer(keys, layout, bucketBegin.data(), sorted, refs, nodes, maxLeafSize);
+    const uint32_t partMax = std::max(kPartMin, n / kPartsAtLeast);
+    if (parallel && n > 2 * partMax) {
+        const BvhBuildResult tree = ParallelTree(writer, *parallel).build(Range{0, n, 0}, partMax, nodes);
+        result.root = tree.root;
+        result.nodeCount = tree.nodeCount;
+        return result;
+    }
     SimdBoxNanSpreads rootBox;
     result.root = writer.build(Range{0, n, 0}, rootBox);
     result.nodeCount = writer.nodeCount();

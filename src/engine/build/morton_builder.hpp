@@ -11,8 +11,8 @@
 namespace vkas {
 
 // The output contract of buildTree (tree_builder.hpp) (refs reordered so that leaves are ranges of them, preorder nodes, at most
-// maxWideNodeCount(n, maxLeafSize) of them, depth at most format::kMaxTreeDepth). It runs on the calling thread
-// (`parallel` is not used yet), so its bytes never depend on how a deferred operation is joined.
+// maxWideNodeCount(n, maxLeafSize) of them, depth at most format::kMaxTreeDepth). With `parallel`, every pass (bounds,
+// keys, the sort, the tree writer's parts) runs on its threads, and the bytes are those of the build without it.
 BvhBuildResult buildMortonBvh(PrimRef* refs, uint32_t n, uint32_t maxLeafSize, format::Node* nodes,
                               std::byte* workspace, const ParallelFor* parallel = nullptr);
 
