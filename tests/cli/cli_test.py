@@ -98,11 +98,16 @@ def obj_facts(path):
     return tris, lo, hi
 
 
-def size_query(n, g):
-    """docs/FORMAT.md, "Build sizes": accelerationStructureSize of n triangles in g geometries."""
+def size_query(n, g, fragments=False):
+    """docs/FORMAT.md, "Build sizes": accelerationStructureSize of n triangles in g geometries; fragments: a build
+    that may cut triangles (PREFER_FAST_TRACE), with room for floor(n / 4) cuts from 64 triangles on."""
     a64 = lambda v: (v + 63) // 64 * 64
-    nodes = 0 if n <= 4 else n // 5 + (n - 1) // 7 + 1
-    return a64(a64(256 + 32 * g) + 256 * nodes) + 44 * n + (4 if n else 0)
+    a16 = lambda v: (v + 15) // 16 * 16
+    cuts = n // 4 if fragments and n >= 64 else 0
+    records = n + cuts
+    nodes = 0 if records <= 4 else records // 5 + (records - 1) // 7 + 1
+    size = a64(a64(256 + 32 * g) + 256 * nodes) + 44 * records + (4 if records else 0)
+    return a16(size) + 64 * cuts if cuts else size
 
 
 def check_tree_consistency(j):
@@ -176,8 +181,11 @@ def case_inspect_bunny_json():
         expect(j["mesh"]["triangles"] == tris == h["primitiveCount"], f"{pref}: triangles {h['primitiveCount']}, OBJ {tris}")
         f32 = lambda v: [struct.unpack("f", struct.pack("f", x))[0] for x in v]  # JSON has 9 digits: a float exactly
         expect(f32(h["boundsLower"]) == lo and f32(h["boundsUpper"]) == hi, f"{pref}: bounds {h['boundsLower']} {h['boundsUpper']} != OBJ {lo} {hi}")
-        expect(j["sizes"]["accelerationStructureSize"] == size_query(tris, h["geometryCount"]),
-               f"{pref}: size {j['sizes']['accelerationStructureSize']} != formula {size_query(tris, h['geometryCount'])}")
+        formula = size_query(tris, h["geometryCount"], fragments=pref == "fast-trace")
+        expect(j["sizes"]["accelerationStructureSize"] == formula,
+               f"{pref}: size {j['sizes']['accelerationStructureSize']} != formula {formula}")
+        expect(h["recordCount"] <= tris + (tris // 4 if pref == "fast-trace" else 0),
+               f"{pref}: {h['recordCount']} records for {tris} triangles")
         expect(h["version"] == 2 and h["type"] == "bottom level" and h["primitiveType"] == "triangles", "header fields")
         check_tree_consistency(j)
     text = run("inspect", BUNNY).stdout

@@ -105,6 +105,7 @@ void printText(const InspectOptions& o, const Subject& s, const TreeStats& t, ui
                 static_cast<unsigned long long>(t.leafBytes + t.recordBytes + t.instanceBytes),
                 share(t.leafBytes + t.recordBytes + t.instanceBytes, t.usedSize).c_str());
     if (t.micromapBytes) std::printf(", micromaps %llu", static_cast<unsigned long long>(t.micromapBytes));
+    if (t.fragmentBytes) std::printf(", fragments %llu", static_cast<unsigned long long>(t.fragmentBytes));
     std::printf(", padding %llu\n", static_cast<unsigned long long>(t.paddingBytes));
     std::printf("%-14s %llu internal nodes, %llu leaves, %llu references; node fill %.3f; SAH cost %.2f\n", "tree",
                 static_cast<unsigned long long>(t.internalNodes), static_cast<unsigned long long>(t.leaves),
@@ -170,6 +171,7 @@ void printJson(const InspectOptions& o, const Subject& s, const TreeStats& t, ui
         .value("records", t.recordBytes)
         .value("instances", t.instanceBytes)
         .value("micromaps", t.micromapBytes)
+        .value("fragments", t.fragmentBytes)
         .value("padding", t.paddingBytes)
         .end();
     j.beginObject("tree")

@@ -105,7 +105,7 @@ TreeStats analyseTree(const unsigned char* block, size_t size) {
     readHeader(block, size, t);
 
     // Bytes by part: header, geometry table, nodes, records (with the triangles' 4-byte tail), the micromap section,
-    // and the alignment gaps between them.
+    // the fragment section (PREFER_FAST_TRACE's spatial splits) and the alignment gaps between them.
     t.headerBytes = kHeaderSize;
     t.geometryBytes = kGeometryDescSize * t.geometryCount;
     t.nodeBytes = kNodeSize * t.nodeCount;
@@ -113,7 +113,10 @@ TreeStats analyseTree(const unsigned char* block, size_t size) {
     if (t.recordStride == 44 && t.recordCount > 0) records += 4;  // the zero tail of the last row's 16-byte load
     (t.type == 0 ? t.instanceBytes : t.recordStride == 44 ? t.leafBytes : t.recordBytes) = records;
     t.micromapBytes = size >= 120 ? load<uint64_t>(block + 112) : 0;  // opacityReserved (0 without micromaps)
-    const uint64_t accounted = t.headerBytes + t.geometryBytes + t.nodeBytes + records + t.micromapBytes;
+    // fragmentCount: the spatial splits' fragment section, 32 bytes an entry (0 without)
+    t.fragmentBytes = size >= 132 ? 32 * uint64_t(load<uint32_t>(block + 128)) : 0;
+    const uint64_t accounted =
+        t.headerBytes + t.geometryBytes + t.nodeBytes + records + t.micromapBytes + t.fragmentBytes;
     t.paddingBytes = t.usedSize > accounted ? t.usedSize - accounted : 0;
 
     const Box rootBox{{t.bounds[0], t.bounds[1], t.bounds[2]}, {t.bounds[3], t.bounds[4], t.bounds[5]}};

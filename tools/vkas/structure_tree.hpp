@@ -25,7 +25,7 @@ struct TreeStats {
 
     // Bytes by part; they add up to usedSize.
     uint64_t headerBytes = 0, geometryBytes = 0, nodeBytes = 0, leafBytes = 0, recordBytes = 0, instanceBytes = 0,
-             micromapBytes = 0, paddingBytes = 0;
+             micromapBytes = 0, fragmentBytes = 0, paddingBytes = 0;
     const char* recordPart() const;  // "leaves" (triangles), "records" (AABBs, spheres, LSS, motion) or "instances"
 
     // The tree.

@@ -17,9 +17,13 @@ StructureSizes structureSizes(const VkAccelerationStructureBuildGeometryInfoKHR&
                                            ? format::StructureType::TopLevel
                                            : format::StructureType::BottomLevel;
     const bool motion = usesMotionRecords(info);
-    const BvhBuildSettings settings = buildSettingsFor(maxLeafSize(type), info.flags);
+    BvhBuildSettings settings = buildSettingsFor(maxLeafSize(type), info.flags);
+    // The most a build of these counts may use: with spatial splits, records and workspace for the split budget.
+    if (settings.quality && usesSpatialSplits(type, recordPrimitiveType(info), motion, info.flags))
+        settings.splitBudget = uint32_t(spatialSplitBudget(primitiveCount));
     StructureSizes s;
-    s.structureSize = maxStructureSize(type, recordPrimitiveType(info), info.geometryCount, primitiveCount, motion);
+    s.structureSize =
+        maxStructureSize(type, recordPrimitiveType(info), info.geometryCount, primitiveCount, motion, info.flags);
     s.buildScratchSize = primitiveCount == 0
                              ? 0
                              : kScratchAlignment + primitiveCount * (sizeof(PrimRef) + gatheredRecordSize(type, motion) +

@@ -10,6 +10,7 @@
 #include "engine/build/refit.hpp"
 #include "engine/build/size_query.hpp"
 #include "engine/build/tree_builder.hpp"
+#include "engine/format/fragment_section.hpp"
 #include "engine/format/layout.hpp"
 #include "vkas/vkas_compat.h"
 #include "engine/format/sizes.hpp"
@@ -25,7 +26,7 @@ namespace {
 void writeHeader(std::byte* dst, StructureType type, VkGeometryTypeKHR primitiveType,
                  const VkAccelerationStructureBuildGeometryInfoKHR& info, uint64_t primitiveCount,
                  const BvhBuildResult& tree, uint32_t recordCount, const StructureLayout& layout, uint64_t usedSize,
-                 uint64_t opacityOffset, uint64_t opacityReserved) {
+                 uint64_t opacityOffset, uint64_t opacityReserved, uint32_t fragmentCount) {
     Header h;
     std::memset(&h, 0, sizeof h);
     h.magic = kMagic;
@@ -46,6 +47,8 @@ void writeHeader(std::byte* dst, StructureType type, VkGeometryTypeKHR primitive
     h.primitiveType = primitiveType;
     h.opacityOffset = opacityOffset;
     h.opacityReserved = opacityReserved;
+    h.fragmentOffset = layout.fragmentOffset;
+    h.fragmentCount = fragmentCount;
     std::memcpy(dst, &h, sizeof h);
 }
 
@@ -114,8 +117,9 @@ void copyInTreeOrder(uint64_t recordSize, std::byte* records, const std::byte* t
     }
 }
 
-// Format 2 triangle leaves (layout.hpp, TriangleLeaf): leaf `ref` written from the gathered records its refs name.
-void writeTriangleLeaf(std::byte* records, const std::byte* temp, const PrimRef* refs, ChildRef ref) {
+// Format 2 triangle leaves (layout.hpp, TriangleLeaf): leaf `ref` written from the gathered records its refs name;
+// with `fragments`, a ref with a region (pad != 0: a spatial split's fragment) gets the kTriangleFragment flag.
+void writeTriangleLeaf(std::byte* records, const std::byte* temp, const PrimRef* refs, ChildRef ref, bool fragments) {
     const uint64_t first = leafFirst(ref);
     const uint32_t n = leafCount(ref);
     const MutableTriangleLeaf leaf = triangleLeaf(records, first, n);
@@ -136,21 +140,49 @@ void writeTriangleLeaf(std::byte* records, const std::byte* temp, const PrimRef*
         const __m128i geometry = _mm_and_si128(_mm_castps_si128(c[1]), _mm_set1_epi32(int(kGeometryIndexMask)));
         const __m128i flags = _mm_slli_epi32(_mm_castps_si128(c[3]), int(kGeometryIndexBits));
         _mm_storeu_si128(reinterpret_cast<__m128i*>(leaf.geometryAndFlags()), _mm_or_si128(geometry, flags));
-        return;
+    } else {
+        for (uint32_t lane = 0; lane < n; ++lane) leaf.setLane(lane, gathered[refs[first + lane].index]);
     }
-    for (uint32_t lane = 0; lane < n; ++lane) leaf.setLane(lane, gathered[refs[first + lane].index]);
+    if (fragments)
+        for (uint32_t lane = 0; lane < n; ++lane)
+            if (refs[first + lane].pad != 0) leaf.geometryAndFlags()[lane] |= kTriangleFragment << kGeometryIndexBits;
+}
+
+// The fragment section (format/fragment_section.hpp): the region of every fragment, in record order.
+uint32_t writeFragments(std::byte* dst, const StructureLayout& layout, const BvhBuildResult& tree) {
+    uint32_t count = 0;
+    for (uint32_t i = 0; i < tree.refCount; ++i) {
+        const PrimRef& ref = tree.refs[i];
+        if (ref.pad == 0) continue;
+        FragmentEntry e;
+        e.record = i;
+        e.reserved = 0;
+        const FragmentRegion& region = tree.regions[ref.pad - 1];
+        std::memcpy(e.lower, region.lower, sizeof e.lower);
+        std::memcpy(e.upper, region.upper, sizeof e.upper);
+        std::memcpy(dst + layout.fragmentOffset + uint64_t(count++) * sizeof e, &e, sizeof e);
+    }
+    return count;
+}
+
+uint32_t countFragments(const BvhBuildResult& tree) {
+    uint32_t count = 0;
+    if (tree.regions)
+        for (uint32_t i = 0; i < tree.refCount; ++i) count += tree.refs[i].pad != 0;
+    return count;
 }
 
 // Every leaf of the tree, found through the node slots that name it (or the root), on several threads for large trees.
 void writeTriangleLeaves(const BuildJob& job, const Node* nodes, const BvhBuildResult& tree, std::byte* records,
                          const std::byte* temp, const PrimRef* refs) {
-    if (isLeaf(tree.root)) writeTriangleLeaf(records, temp, refs, tree.root);
+    const bool fragments = tree.regions != nullptr;
+    if (isLeaf(tree.root)) writeTriangleLeaf(records, temp, refs, tree.root, fragments);
     constexpr uint32_t kNodeChunk = 4096;
     parallelForChunks(tree.nodeCount > 2 * kNodeChunk ? job.parallel : nullptr, tree.nodeCount, kNodeChunk,
                       [&](uint32_t, uint64_t begin, uint64_t end) {
                           for (uint64_t k = begin; k < end; ++k)
                               for (const ChildRef ref : nodes[k].child)
-                                  if (isLeaf(ref)) writeTriangleLeaf(records, temp, refs, ref);
+                                  if (isLeaf(ref)) writeTriangleLeaf(records, temp, refs, ref, fragments);
                       });
 }
 
@@ -164,7 +196,8 @@ VkResult buildAccelerationStructure(const BuildJob& job) {
     const bool motion = usesMotionRecords(info);  // [NV-motion] MotionInstanceRecords / MotionTriangleRecords
     const VkGeometryTypeKHR primitiveType = recordPrimitiveType(info);
     const uint64_t opacityBound = opacitySectionBound(info, [&](uint32_t g) { return job.ranges[g].primitiveCount; });
-    if (maxStructureSize(type, primitiveType, info.geometryCount, total, motion) + opacityBound > job.dstSize)
+    if (maxStructureSize(type, primitiveType, info.geometryCount, total, motion, info.flags) + opacityBound >
+        job.dstSize)
         return VK_ERROR_UNKNOWN;
 
     const PrimitiveKind& kind = primitiveKind(type == StructureType::TopLevel, primitiveType, motion);
@@ -182,14 +215,27 @@ VkResult buildAccelerationStructure(const BuildJob& job) {
 
     const StructureLayout pre = structureLayout(type, primitiveType, info.geometryCount, 0, 0, motion);
     auto* nodes = reinterpret_cast<Node*>(job.dst + pre.nodeOffset);
-    const BvhBuildResult tree = buildTree(refs, n, buildSettingsFor(maxLeafSize(type), info.flags), nodes, workspace,
-                                           job.parallel);
-    const StructureLayout layout = structureLayout(type, primitiveType, info.geometryCount, tree.nodeCount, n, motion);
+    BvhBuildSettings settings = buildSettingsFor(maxLeafSize(type), info.flags);
+    // PREFER_FAST_TRACE may cut triangles at planes (build/spatial_split_builder.hpp), not with micromaps, whose
+    // section follows the records.
+    if (settings.quality && opacityBound == 0 && usesSpatialSplits(type, primitiveType, motion, info.flags)) {
+        settings.splitBudget = uint32_t(spatialSplitBudget(n));
+        settings.triangles = reinterpret_cast<const TriangleRecord*>(temp);
+    }
+    BvhBuildResult tree = buildTree(refs, n, settings, nodes, workspace, job.parallel);
+    if (!tree.refs) tree.refs = refs, tree.refCount = n;
+    const uint32_t recordCount = tree.refCount;
+    const uint32_t fragmentCount = countFragments(tree);
+    const StructureLayout layout =
+        structureLayout(type, primitiveType, info.geometryCount, tree.nodeCount, recordCount, motion, fragmentCount);
     // The records in tree order: leaf ranges of refs name their temp slots.
     std::byte* records = job.dst + layout.recordOffset;
     if (storesTriangleLeaves(type, primitiveType, motion)) {
-        writeTriangleLeaves(job, nodes, tree, records, temp, refs);
-        std::memset(records + kTriangleBytes * n, 0, layout.end - layout.recordOffset - kTriangleBytes * n);  // tail
+        writeTriangleLeaves(job, nodes, tree, records, temp, tree.refs);
+        const uint64_t recordEnd = fragmentCount != 0 ? layout.fragmentOffset : layout.end;
+        std::memset(records + kTriangleBytes * recordCount, 0,
+                    recordEnd - layout.recordOffset - kTriangleBytes * recordCount);  // tail
+        if (fragmentCount != 0) writeFragments(job.dst, layout, tree);
     } else {
         const uint64_t size = recordSize(type, primitiveType, motion);
         constexpr uint32_t kCopyChunk = 65536;
@@ -215,7 +261,8 @@ VkResult buildAccelerationStructure(const BuildJob& job) {
     }
     writeGeometryDescs(job.dst, job);
     clearGaps(job.dst, info.geometryCount, tree.nodeCount, layout);
-    writeHeader(job.dst, type, primitiveType, info, total, tree, n, layout, usedSize, opacityOffset, opacityReserved);
+    writeHeader(job.dst, type, primitiveType, info, total, tree, recordCount, layout, usedSize, opacityOffset,
+                opacityReserved, fragmentCount);
     return VK_SUCCESS;
 }
 

@@ -5,6 +5,7 @@
 #include "engine/build/morton_builder.hpp"
 #include "engine/build/quality_builder.hpp"
 #include "engine/build/sah_builder.hpp"
+#include "engine/build/spatial_split_builder.hpp"
 
 namespace vkas {
 
@@ -20,12 +21,15 @@ BvhBuildSettings buildSettingsFor(uint32_t maxLeafSize, uint32_t buildFlags) {
 }
 
 uint64_t treeWorkspacePerPrimitive(const BvhBuildSettings& settings) {
+    if (settings.quality && settings.splitBudget != 0) return spatialSplitWorkspacePerPrimitive();
     return settings.quality ? qualityWorkspacePerPrimitive() : kTreeWorkspacePerPrimitive;
 }
 
 BvhBuildResult buildTree(PrimRef* refs, uint32_t n, const BvhBuildSettings& settings, format::Node* nodes,
                          std::byte* workspace, const ParallelFor* parallel) {
     if (settings.morton) return buildMortonBvh(refs, n, settings.maxLeafSize, nodes, workspace, parallel);
+    if (settings.quality && settings.splitBudget != 0 && settings.triangles)
+        return buildSpatialSplitBvh(refs, n, settings, nodes, workspace, parallel);
     if (settings.quality) return buildQualityBvh(refs, n, settings, nodes, workspace, parallel);
     return buildSahBvh(refs, n, settings, nodes, workspace, parallel);
 }

@@ -46,6 +46,11 @@ struct BvhBuildSettings {
     uint32_t binSampleTarget = 0;
     bool morton = false;  // build with the Morton-code builder (morton_builder.hpp) instead of the SAH
     bool quality = false;  // build with the quality builder (quality_builder.hpp): binary SAH, optimal collapse
+    // With quality: also cut references at planes, up to splitBudget cuts (spatial_split_builder.hpp), over the
+    // gathered triangles the refs' indices name. Set by the structure build where format/sizes.hpp's
+    // usesSpatialSplits allows it (the selector sees no triangles).
+    uint32_t splitBudget = 0;
+    const format::TriangleRecord* triangles = nullptr;
 };
 
 // The settings a build's flags ask for: PREFER_FAST_BUILD the Morton-code builder (several times faster, a somewhat
@@ -55,10 +60,21 @@ struct BvhBuildSettings {
 // bottom-level build.
 BvhBuildSettings buildSettingsFor(uint32_t maxLeafSize, uint32_t buildFlags);
 
+// A spatial split's fragment region (spatial_split_builder.hpp): lower <= p < upper on every axis.
+struct FragmentRegion {
+    float lower[3];
+    float upper[3];
+};
+
 struct BvhBuildResult {
     format::ChildRef root = format::kEmptyRef;
     uint32_t nodeCount = 0;
     Aabb bounds;
+    // Where the leaves' references are: null for the refs given to buildTree (n of them, reordered); a spatial-split
+    // build returns its own array of refCount references (more than n when it cut some) and their regions.
+    const PrimRef* refs = nullptr;
+    uint32_t refCount = 0;
+    const FragmentRegion* regions = nullptr;
 };
 
 // The builders' temporary memory per primitive, which the build takes from its scratch buffer (after the gathered
@@ -68,7 +84,7 @@ struct BvhBuildResult {
 constexpr uint64_t kTreeWorkspacePerPrimitive = 48;
 
 // The workspace bytes per primitive of the builder `settings` names: kTreeWorkspacePerPrimitive, or more for the
-// quality builder (quality_builder.hpp).
+// quality builder (quality_builder.hpp) and its spatial splits (spatial_split_builder.hpp).
 uint64_t treeWorkspacePerPrimitive(const BvhBuildSettings& settings);
 
 // Builds over refs[0..n) (reordered in place) into nodes[0..nodeCount) with the builder `settings` names;

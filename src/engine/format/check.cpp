@@ -4,6 +4,7 @@
 #include <cstring>
 
 #include "engine/util/alongside.hpp"
+#include "engine/format/fragment_section.hpp"
 #include "engine/format/opacity_section.hpp"
 #include "engine/format/sizes.hpp"
 #include "engine/util/byte_io.hpp"
@@ -124,6 +125,33 @@ const char* checkOpacitySection(const std::byte* block, const Header& h, HostVec
 
 }  // namespace
 
+// The fragment section (fragment_section.hpp): where the layout puts it, inside usedSize, entries sorted by record,
+// each inside the record array with a non-empty region. Zero offset and count without fragments.
+static const char* checkFragmentSection(const std::byte* block, const Header& h, bool triangleLeaves, uint64_t recordTail) {
+    if (h.reserved1 != 0) return "a reserved header field is not zero";
+    if (h.fragmentCount == 0) return h.fragmentOffset != 0 ? "a fragment section offset without fragments" : nullptr;
+    if (!triangleLeaves) return "fragments in a structure without triangle leaves";
+    if (h.opacityOffset != 0 || h.opacityReserved != 0) return "fragments in a structure with opacity micromaps";
+    const uint64_t recordEnd = h.recordOffset + uint64_t(h.recordCount) * kTriangleBytes + recordTail;
+    const uint64_t expected = (recordEnd + kFragmentAlignment - 1) / kFragmentAlignment * kFragmentAlignment;
+    if (h.fragmentOffset != expected) return "the fragment section does not follow the records";
+    if (h.fragmentOffset > h.usedSize || uint64_t(h.fragmentCount) * sizeof(FragmentEntry) > h.usedSize - h.fragmentOffset)
+        return "the fragment section does not fit in usedSize";
+    if (h.fragmentCount > h.recordCount) return "more fragments than records";
+    uint64_t previous = 0;
+    for (uint32_t i = 0; i < h.fragmentCount; ++i) {
+        FragmentEntry e;
+        std::memcpy(&e, block + h.fragmentOffset + uint64_t(i) * sizeof e, sizeof e);
+        if (e.record >= h.recordCount) return "a fragment names a record outside the record array";
+        if (i != 0 && e.record <= previous) return "the fragment section is not sorted by record";
+        previous = e.record;
+        if (e.reserved != 0) return "a fragment's reserved word is not zero";
+        for (int a = 0; a < 3; ++a)
+            if (!(e.lower[a] < e.upper[a])) return "a fragment's region is empty";
+    }
+    return nullptr;
+}
+
 CheckResult checkBlock(const std::byte* block, uint64_t size) {
     if (!block || size < sizeof(Header)) return corrupt("the block is shorter than its header");
     Header h;
@@ -160,7 +188,10 @@ CheckResult checkBlock(const std::byte* block, uint64_t size) {
         return corrupt("the records do not fit in usedSize");
     // Format 2 stores geometry indices in 24 bits (layout.hpp, TriangleLeaf); format 1 blocks must fit to load.
     if (!topLevel && h.geometryCount > kGeometryIndexMask + 1) return corrupt("more geometries than 2^24");
-    if (h.recordCount > h.primitiveCount) return corrupt("more records than primitives");
+    if (const char* why = checkFragmentSection(block, h, triangleLeaves, tail)) return corrupt(why);
+    // Every record but a fragment stands for a primitive of its own.
+    if (uint64_t(h.recordCount) > uint64_t(h.primitiveCount) + h.fragmentCount)
+        return corrupt("more records than primitives");
     // Geometry table.
     for (uint32_t g = 0; g < h.geometryCount; ++g) {
         const uint32_t type = load32(block + h.geometryOffset + uint64_t(g) * sizeof(GeometryDesc));
@@ -202,6 +233,7 @@ CheckResult checkBlock(const std::byte* block, uint64_t size) {
                       offsetof(GeometryDesc, primitiveCount));
     };
     if (triangleLeaves) {  // format 2 triangles: lane by lane through the leaves (which lie inside the array)
+        uint64_t fragmentsSeen = 0;
         for (const ChildRef ref : leaves) {
             const uint64_t at = leafFirst(ref) * kTriangleBytes;
             const uint32_t n = leafCount(ref);
@@ -211,10 +243,17 @@ CheckResult checkBlock(const std::byte* block, uint64_t size) {
                 if (geometry >= h.geometryCount) return corrupt("a record's geometryIndex is out of range");
                 if (micromapMissing(word >> kGeometryIndexBits, geometry))
                     return corrupt("a triangle asks for an opacity micromap its geometry does not have");
+                if ((word >> kGeometryIndexBits) & kTriangleFragment) {
+                    if (!findFragment(block, uint32_t(leafFirst(ref) + l)))
+                        return corrupt("a fragment record has no region in the fragment section");
+                    ++fragmentsSeen;
+                }
                 if (load32(records + at + 4 * (uint64_t(kTriangleRows) * n + l)) >= primitivesOf(geometry))
                     return corrupt("a record's primitiveIndex is out of range");
             }
         }
+        // The entries are sorted and distinct, so one per flagged record means no entry names an unflagged one.
+        if (fragmentsSeen != h.fragmentCount) return corrupt("the fragment section names records that are not fragments");
         return {};
     }
     if (topLevel) {

@@ -71,7 +71,13 @@ struct Header {
     // 0 when no geometry has one. Blocks written before micromaps have zeros here.
     uint64_t opacityOffset;
     uint64_t opacityReserved;
-    uint8_t reserved[256 - 120];
+    // PREFER_FAST_TRACE with spatial splits (format/fragment_section.hpp): the fragment section after the triangle
+    // array, the region of every record that stands for part of a split triangle, or 0 and 0 when no triangle was
+    // split. Blocks written before spatial splits have zeros here.
+    uint64_t fragmentOffset;
+    uint32_t fragmentCount;
+    uint32_t reserved1;
+    uint8_t reserved[256 - 136];
 };
 static_assert(sizeof(Header) == 256);
 
@@ -104,6 +110,9 @@ constexpr uint32_t kTriangleDegenerate = 0x2;  // kept for updates, never hit
 constexpr uint32_t kTriangleNoDuplicateAnyHit = 0x4;
 // [EXT-OMM] The geometry has an opacity micromap: the section at Header::opacityOffset decides the triangle's opacity.
 constexpr uint32_t kTriangleMicromap = 0x10;
+// A fragment of a triangle that a spatial split cut into several records (format/fragment_section.hpp): it reports a
+// hit only inside its region, so every point of the triangle is reported by exactly one of its records.
+constexpr uint32_t kTriangleFragment = 0x20;
 // AABB record flags: the same bits as for triangles.
 constexpr uint32_t kAabbOpaque = kTriangleOpaque;
 constexpr uint32_t kAabbNoDuplicateAnyHit = kTriangleNoDuplicateAnyHit;

@@ -1,5 +1,9 @@
 #include "engine/format/sizes.hpp"
 
+#include <vulkan/vulkan_core.h>
+
+#include "engine/format/fragment_section.hpp"
+
 namespace vkas {
 
 namespace {
@@ -11,14 +15,26 @@ uint32_t maxLeafSize(format::StructureType type) {
 }
 
 StructureLayout structureLayout(format::StructureType type, uint32_t primitiveType, uint32_t geometryCount,
-                                uint64_t nodeCount, uint64_t recordCount, bool motion) {
+                                uint64_t nodeCount, uint64_t recordCount, bool motion, uint64_t fragmentCount) {
     StructureLayout l;
     l.geometryOffset = sizeof(format::Header);
     l.nodeOffset = alignUp(l.geometryOffset + uint64_t(geometryCount) * sizeof(format::GeometryDesc), 64);
     l.recordOffset = alignUp(l.nodeOffset + nodeCount * sizeof(format::Node), 64);
     l.end = l.recordOffset + recordCount * recordSize(type, primitiveType, motion) +
             recordTailSize(type, primitiveType, motion, recordCount);
+    l.fragmentOffset = 0;
+    if (fragmentCount != 0) {
+        l.fragmentOffset = alignUp(l.end, format::kFragmentAlignment);
+        l.end = l.fragmentOffset + fragmentCount * sizeof(format::FragmentEntry);
+    }
     return l;
+}
+
+bool usesSpatialSplits(format::StructureType type, uint32_t primitiveType, bool motion, uint32_t buildFlags) {
+    return storesTriangleLeaves(type, primitiveType, motion) &&
+           (buildFlags & VK_BUILD_ACCELERATION_STRUCTURE_PREFER_FAST_TRACE_BIT_KHR) &&
+           !(buildFlags & VK_BUILD_ACCELERATION_STRUCTURE_PREFER_FAST_BUILD_BIT_KHR) &&
+           !(buildFlags & VK_BUILD_ACCELERATION_STRUCTURE_ALLOW_UPDATE_BIT_KHR);
 }
 
 uint64_t maxWideNodeCount(uint64_t n, uint32_t maxLeafSize) {
@@ -30,9 +46,12 @@ uint64_t maxWideNodeCount(uint64_t n, uint32_t maxLeafSize) {
 }
 
 uint64_t maxStructureSize(format::StructureType type, uint32_t primitiveType, uint32_t geometryCount,
-                          uint64_t primitiveCount, bool motion) {
-    const uint64_t nodes = maxWideNodeCount(primitiveCount, maxLeafSize(type));
-    return structureLayout(type, primitiveType, geometryCount, nodes, primitiveCount, motion).end;
+                          uint64_t primitiveCount, bool motion, uint32_t buildFlags) {
+    const uint64_t splits =
+        usesSpatialSplits(type, primitiveType, motion, buildFlags) ? spatialSplitBudget(primitiveCount) : 0;
+    const uint64_t records = primitiveCount + splits;
+    const uint64_t nodes = maxWideNodeCount(records, maxLeafSize(type));
+    return structureLayout(type, primitiveType, geometryCount, nodes, records, motion, 2 * splits).end;
 }
 
 }  // namespace vkas

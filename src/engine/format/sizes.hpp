@@ -14,6 +14,7 @@ struct StructureLayout {
     uint64_t geometryOffset;
     uint64_t nodeOffset;
     uint64_t recordOffset;
+    uint64_t fragmentOffset;  // 0 without fragments (format/fragment_section.hpp)
     uint64_t end;  // used size
 };
 
@@ -49,14 +50,26 @@ constexpr uint64_t recordTailSize(uint32_t type, uint32_t primitiveType, uint32_
 
 uint32_t maxLeafSize(format::StructureType type);
 StructureLayout structureLayout(format::StructureType type, uint32_t primitiveType, uint32_t geometryCount,
-                                uint64_t nodeCount, uint64_t recordCount, bool motion = false);
+                                uint64_t nodeCount, uint64_t recordCount, bool motion = false,
+                                uint64_t fragmentCount = 0);
+
+// PREFER_FAST_TRACE with spatial splits (build/spatial_split_builder.hpp): a bottom level of (non-motion) triangles
+// built for the fastest trace and never updated (a refit cannot move a split plane) may store a triangle as several
+// fragment records. The split budget bounds how many: at most spatialSplitBudget(n) splits, each adding one record
+// and at most two fragment entries.
+bool usesSpatialSplits(format::StructureType type, uint32_t primitiveType, bool motion, uint32_t buildFlags);
+constexpr uint64_t spatialSplitBudget(uint64_t primitiveCount) {
+    return primitiveCount >= 64 ? primitiveCount / 4 : 0;
+}
 
 // Upper bound on the nodes a build of n primitives writes (every builder keeps to it; docs/FORMAT.md derives it).
 uint64_t maxWideNodeCount(uint64_t n, uint32_t maxLeafSize);
 
 // The used size of the largest structure any build of `primitiveCount` primitives (or instances) in
 // `geometryCount` geometries can make.
+// `buildFlags`: the VkBuildAccelerationStructureFlagsKHR of the build, which decide whether spatial splits may add
+// records (usesSpatialSplits).
 uint64_t maxStructureSize(format::StructureType type, uint32_t primitiveType, uint32_t geometryCount,
-                          uint64_t primitiveCount, bool motion = false);
+                          uint64_t primitiveCount, bool motion = false, uint32_t buildFlags = 0);
 
 }  // namespace vkas

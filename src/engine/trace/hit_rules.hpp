@@ -5,6 +5,7 @@
 
 #include <cstdint>
 
+#include "engine/format/fragment_section.hpp"
 #include "engine/format/layout.hpp"
 #include "engine/trace/opacity_micromap.hpp"
 #include "engine/trace/ray.hpp"
@@ -151,10 +152,19 @@ inline bool triangleCandidate(const ShearedRay& r, float tMin, float tMax, uint3
 // functions already computed): the ray query and both batch kernels take the lanes of a leaf through it, in order.
 // Its first half, the intersection (unless the triangle is degenerate), is leafLaneHit: a packet of rays
 // (packet_kernel_body.hpp) looks at t before the interval test, to find ties.
-inline bool leafLaneHit(const format::ConstTriangleLeaf& leaf, uint32_t lane0, uint32_t lane, const FourLaneEdges& e,
-                        const ShearedRay& r, TriangleHit& hit) {
-    if (leaf.flags(lane0 + lane) & format::kTriangleDegenerate) return false;
-    return laneIntersection(leaf, lane0, lane, e, r, hit);
+// A fragment of a split triangle (format/fragment_section.hpp) meets the ray only where the hit point lies in its
+// region, so that a triangle stored in several records is hit once.
+inline bool leafLaneHit(const std::byte* blas, const format::ConstTriangleLeaf& leaf, uint32_t lane0, uint32_t lane,
+                        const FourLaneEdges& e, const ShearedRay& r, TriangleHit& hit) {
+    const uint32_t flags = leaf.flags(lane0 + lane);
+    if (flags & format::kTriangleDegenerate) return false;
+    if (!laneIntersection(leaf, lane0, lane, e, r, hit)) return false;
+    if (!(flags & format::kTriangleFragment)) return true;
+    const uint64_t record = uint64_t(leaf.base - format::records(blas)) / format::kTriangleBytes + lane0 + lane;
+    const format::FragmentEntry* fragment = format::findFragment(blas, uint32_t(record));
+    float v[3][3];
+    leaf.positions(lane0 + lane, v);
+    return !fragment || format::fragmentHolds(*fragment, v, hit.b, hit.c);
 }
 inline TriangleId leafTriangleId(const std::byte* blas, const format::ConstTriangleLeaf& leaf, uint32_t at) {
     return {blas, leaf.geometryIndex(at), leaf.primitiveIndex()[at]};
@@ -162,7 +172,7 @@ inline TriangleId leafTriangleId(const std::byte* blas, const format::ConstTrian
 inline bool leafLaneCandidate(const std::byte* blas, const format::ConstTriangleLeaf& leaf, uint32_t lane0,
                               uint32_t lane, const FourLaneEdges& e, const ShearedRay& r, float tMin, float tMax,
                               uint32_t rayFlags, uint32_t instanceFlags, TriangleCandidate& out) {
-    return leafLaneHit(leaf, lane0, lane, e, r, out.hit) &&
+    return leafLaneHit(blas, leaf, lane0, lane, e, r, out.hit) &&
            acceptTriangleHit(tMin, tMax, rayFlags, instanceFlags, leaf.flags(lane0 + lane),
                              leafTriangleId(blas, leaf, lane0 + lane), out);
 }

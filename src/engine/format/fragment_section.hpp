@@ -1,0 +1,61 @@
+// The fragment section of a bottom level of triangles built with PREFER_FAST_TRACE (docs/FORMAT.md, "Fragments").
+//
+// A spatial split (build/spatial_split_builder.hpp) cuts a triangle's reference in two at a plane, so the triangle is
+// stored in several records, each bounding only its part. Each such record has the kTriangleFragment flag and a
+// region here: a half-open box [lower, upper) of space. The regions of one triangle's fragments partition all of
+// space (they start as the whole space and each split divides one region at its plane), and a fragment reports a
+// hit only where the hit point lies in its region. So however many of its fragments a ray visits, a triangle's
+// intersection is reported by exactly one of them: duplicated references never show a ray the same primitive twice.
+//
+// The section starts at Header::fragmentOffset, 16-byte aligned after the triangle array's tail, and holds
+// Header::fragmentCount entries sorted by record index (strictly increasing).
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+#include "engine/format/layout.hpp"
+
+namespace vkas::format {
+
+struct FragmentEntry {
+    uint32_t record;    // the record's index in the triangle array (its leaf's first record + its lane)
+    uint32_t reserved;  // 0
+    float lower[3];     // the region: lower <= p < upper on every axis (an unbounded side is -inf / +inf)
+    float upper[3];
+};
+static_assert(sizeof(FragmentEntry) == 32);
+
+constexpr uint64_t kFragmentAlignment = 16;
+
+inline const FragmentEntry* fragments(const std::byte* base) {
+    return reinterpret_cast<const FragmentEntry*>(base + header(base)->fragmentOffset);
+}
+
+// The entry of `record`, or null when the section has none (a checked block always has one for a flagged record).
+inline const FragmentEntry* findFragment(const std::byte* base, uint32_t record) {
+    const FragmentEntry* e = fragments(base);
+    uint32_t lo = 0, hi = header(base)->fragmentCount;
+    while (lo < hi) {
+        const uint32_t mid = lo + (hi - lo) / 2;
+        if (e[mid].record < record)
+            lo = mid + 1;
+        else
+            hi = mid;
+    }
+    return lo < header(base)->fragmentCount && e[lo].record == record ? &e[lo] : nullptr;
+}
+
+// Whether the point of triangle v at barycentrics (b, c) lies in the region of fragment `e`. The point is computed
+// in double from the stored floats, the same for every fragment of the triangle (their records hold the same
+// positions and the ray meets them with the same arithmetic), so exactly one region holds it.
+inline bool fragmentHolds(const FragmentEntry& e, const float (*v)[3], float b, float c) {
+    for (int a = 0; a < 3; ++a) {
+        const double p = double(v[0][a]) + double(b) * (double(v[1][a]) - double(v[0][a])) +
+                         double(c) * (double(v[2][a]) - double(v[0][a]));
+        if (!(p >= double(e.lower[a]) && p < double(e.upper[a]))) return false;
+    }
+    return true;
+}
+
+}  // namespace vkas::format

@@ -1,0 +1,133 @@
+// PREFER_FAST_TRACE's spatial splits through the API: a bottom level whose triangles were cut into fragments
+// (docs/FORMAT.md, "Fragments") shows a ray every triangle it meets exactly once, as the brute-force oracle lists
+// them: every candidate of a query that confirms none (non-opaque geometry, and opaque geometry under the NoOpaque
+// ray flag), with and without NO_DUPLICATE_ANY_HIT_INVOCATION; closest and any hits of queries and vkasTraceRays
+// match the oracle as for any other build.
+#include <cstring>
+#include <set>
+#include <tuple>
+
+#include "meshes.hpp"
+#include "vkas_test.hpp"
+
+namespace vt {
+namespace {
+
+constexpr uint32_t kRayNoOpaque = 0x2;  // SPIR-V RayFlagsNoOpaqueKHR
+
+class spatial_splits : public VkasTest {
+protected:
+    // Header fields at their documented offsets (docs/FORMAT.md, "Header"): the records stored and the fragments.
+    static uint32_t header32(const AccelStruct* as, size_t offset) {
+        uint32_t v;
+        std::memcpy(&v, as->data() + offset, 4);
+        return v;
+    }
+    static uint32_t primitiveCount(const AccelStruct* as) { return header32(as, 60); }
+    static uint32_t recordCount(const AccelStruct* as) { return header32(as, 64); }
+    static uint32_t fragmentCount(const AccelStruct* as) { return header32(as, 128); }
+
+    // Large, overlapping triangles (which spatial splits cut) and a closed surface of shared edges (where a cut
+    // fragment borders a neighbour's).
+    std::vector<std::unique_ptr<GeometryData>> geometries(VkGeometryFlagsKHR flags) {
+        std::vector<std::unique_ptr<GeometryData>> g;
+        g.push_back(makeGeometry(triangleSoup(700, rng, 0.9f), VK_INDEX_TYPE_NONE_KHR, flags));
+        g.push_back(makeGeometry(torusKnot(96, 12), VK_INDEX_TYPE_UINT32, flags));
+        return g;
+    }
+
+    AccelStruct* splitScene(const std::vector<std::unique_ptr<GeometryData>>& g, AccelStruct** blasOut = nullptr) {
+        BuildOptions opt;
+        opt.flags = VK_BUILD_ACCELERATION_STRUCTURE_PREFER_FAST_TRACE_BIT_KHR;
+        AccelStruct* blas = buildBlas(std::vector<const GeometryData*>{g[0].get(), g[1].get()}, opt);
+        EXPECT_GT(fragmentCount(blas), 0u) << "no triangle was cut: the test would prove nothing";
+        EXPECT_GT(recordCount(blas), primitiveCount(blas));
+        std::cout << recordCount(blas) << " records for " << primitiveCount(blas) << " triangles, "
+                  << fragmentCount(blas) << " fragments" << std::endl;
+        if (blasOut) *blasOut = blas;
+        return buildSingleInstanceTlas(blas);
+    }
+
+    std::vector<oracle::Ray> rays(const AccelStruct* tlas, size_t n) {
+        auto r = randomRays(*tlas->scene, n);
+        const auto t = targetedRays(*tlas->scene, n);
+        r.insert(r.end(), t.begin(), t.end());
+        return r;
+    }
+
+    // Every candidate of a query that confirms none against the oracle's list: each at most once, each listed, each
+    // required one present. Returns the candidates seen.
+    size_t checkCandidateSets(const AccelStruct* tlas, const std::vector<oracle::Ray>& rs, uint32_t rayFlags) {
+        size_t seen = 0;
+        for (size_t i = 0; i < rs.size(); ++i) {
+            const oracle::Ray& ray = rs[i];
+            const oracle::Result expected = oracle::trace(*tlas->scene, ray, rayFlags, 0xFF);
+            const QueryTrace q = query(tlas->handle, ray, rayFlags, 0xFF, Confirm::None);
+            EXPECT_TRUE(q.problems.empty()) << "ray " << i << ": " << q.problems;
+            std::set<std::tuple<int32_t, int32_t, int32_t>> shown;
+            for (const Hit& h : q.candidates) {
+                EXPECT_TRUE(shown.insert({h.instanceId, h.geometryIndex, h.primitiveIndex}).second)
+                    << "ray " << i << " was shown primitive " << h.primitiveIndex << " of geometry " << h.geometryIndex
+                    << " twice";
+                const oracle::Candidate* c = expected.find(h.instanceId, h.geometryIndex, h.primitiveIndex);
+                EXPECT_NE(c, nullptr) << "ray " << i << ": " << h.str() << " is no candidate";
+                if (c) {
+                    EXPECT_NEAR(h.t, c->t, c->tTolerance) << "ray " << i << ": " << h.str();
+                }
+            }
+            for (const oracle::Candidate& c : expected.candidates) {
+                if (c.optional) continue;
+                EXPECT_TRUE(shown.count({c.instanceId, c.geometryIndex, c.primitiveIndex}))
+                    << "ray " << i << " missed primitive " << c.primitiveIndex << " of geometry " << c.geometryIndex;
+            }
+            seen += q.candidates.size();
+        }
+        return seen;
+    }
+};
+
+TEST_F(spatial_splits, non_opaque_triangles_are_each_shown_once) {
+    const auto g = geometries(0);
+    AccelStruct* tlas = splitScene(g);
+    const auto rs = rays(tlas, 400);
+    EXPECT_GT(checkCandidateSets(tlas, rs, 0), rs.size());
+}
+
+TEST_F(spatial_splits, no_duplicate_any_hit_geometry_is_shown_once) {
+    const auto g = geometries(VK_GEOMETRY_NO_DUPLICATE_ANY_HIT_INVOCATION_BIT_KHR);
+    AccelStruct* tlas = splitScene(g);
+    const auto rs = rays(tlas, 300);
+    EXPECT_GT(checkCandidateSets(tlas, rs, 0), rs.size());
+}
+
+TEST_F(spatial_splits, opaque_triangles_under_no_opaque_rays_are_each_shown_once) {
+    const auto g = geometries(VK_GEOMETRY_OPAQUE_BIT_KHR);
+    AccelStruct* tlas = splitScene(g);
+    const auto rs = rays(tlas, 300);
+    EXPECT_GT(checkCandidateSets(tlas, rs, kRayNoOpaque), rs.size());
+}
+
+TEST_F(spatial_splits, closest_and_any_hits_match_the_oracle) {
+    for (const VkGeometryFlagsKHR flags : {VkGeometryFlagsKHR(VK_GEOMETRY_OPAQUE_BIT_KHR), VkGeometryFlagsKHR(0)}) {
+        const auto g = geometries(flags);
+        AccelStruct* tlas = splitScene(g);
+        const auto rs = rays(tlas, 400);
+        EXPECT_GT(checkRays(tlas, rs), rs.size() / 4);
+    }
+}
+
+TEST_F(spatial_splits, the_same_inputs_build_the_same_bytes_and_copies_keep_the_fragments) {
+    const auto g = geometries(VK_GEOMETRY_OPAQUE_BIT_KHR);
+    AccelStruct* blas = nullptr;
+    AccelStruct* tlas = splitScene(g, &blas);
+    AccelStruct* twin = nullptr;
+    splitScene(g, &twin);
+    uint64_t used;
+    std::memcpy(&used, blas->data() + 16, 8);
+    EXPECT_LE(used, blas->sizes.accelerationStructureSize);
+    EXPECT_EQ(std::memcmp(blas->data(), twin->data(), size_t(used)), 0);
+    (void)tlas;
+}
+
+}  // namespace
+}  // namespace vt
