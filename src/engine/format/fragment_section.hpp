@@ -4,8 +4,9 @@
 // stored in several records, each bounding only its part. Each such record has the kTriangleFragment flag and a
 // region here: a half-open box [lower, upper) of space. The regions of one triangle's fragments partition all of
 // space (they start as the whole space and each split divides one region at its plane), and a fragment reports a
-// hit only where the hit point lies in its region. So however many of its fragments a ray visits, a triangle's
-// intersection is reported by exactly one of them: duplicated references never show a ray the same primitive twice.
+// non-opaque candidate only where the hit point lies in its region. So however many of its fragments a ray visits, a
+// triangle's candidate is reported by exactly one of them: duplicated references never show a ray the same primitive
+// twice. (Opaque hits need no region: all fragments meet the ray at the same t, trace/hit_rules.hpp.)
 //
 // The section starts at Header::fragmentOffset, 16-byte aligned after the triangle array's tail, and holds
 // Header::fragmentCount entries sorted by record index (strictly increasing).

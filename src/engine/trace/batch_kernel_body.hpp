@@ -31,8 +31,13 @@ static inline void testTriangleLeaf(Walk& w, const std::byte* blas, format::Chil
         for (uint32_t lanes = e.covered | e.undecided; lanes != 0; lanes &= lanes - 1) {
             const uint32_t lane = uint32_t(__builtin_ctz(lanes));
             TriangleCandidate c;
-            if (!leafLaneHit(blas, leaf, lane0, lane, e, w.objectRay, c.hit)) continue;
-            if (kFindTies && c.hit.t == w.tMax && w.committed->type != kCommittedNone) w.tied = true;
+            if (!leafLaneHit(leaf, lane0, lane, e, w.objectRay, c.hit)) continue;
+            // (Another fragment of the committed triangle, format/fragment_section.hpp, is no tie: it is the same hit.)
+            if (kFindTies && c.hit.t == w.tMax && w.committed->type != kCommittedNone &&
+                !(w.committed->isTriangle && w.committed->instance == w.instance &&
+                  w.committed->trianglePrimitiveIndex == leaf.primitiveIndex()[lane0 + lane] &&
+                  w.committed->triangleGeometryIndex == leaf.geometryIndex(lane0 + lane)))
+                w.tied = true;
             if (!acceptTriangleHit(w.tMin, w.tMax, w.flags, instanceFlags, leaf.flags(lane0 + lane),
                                    leafTriangleId(blas, leaf, lane0 + lane), c))
                 continue;

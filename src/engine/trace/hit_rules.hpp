@@ -99,7 +99,20 @@ struct TriangleCandidate {
 struct TriangleId {
     const std::byte* blas;
     uint32_t geometryIndex, primitiveIndex;
+    // A format-2 leaf's triangle: its leaf and lane, where a fragment's record and positions are read.
+    format::ConstTriangleLeaf leaf{nullptr, 0};
+    uint32_t lane = 0;
 };
+
+// A fragment of a triangle that spatial splits cut into several records (format/fragment_section.hpp) reports a hit
+// only where the hit point lies in its region, so that the triangle is shown to a ray once.
+inline bool fragmentReports(const TriangleId& id, const TriangleHit& hit) {
+    const uint64_t record = uint64_t(id.leaf.base - format::records(id.blas)) / format::kTriangleBytes + id.lane;
+    const format::FragmentEntry* fragment = format::findFragment(id.blas, uint32_t(record));
+    float v[3][3];
+    id.leaf.positions(id.lane, v);
+    return !fragment || format::fragmentHolds(*fragment, v, hit.b, hit.c);
+}
 
 // The geometry's opacity before the instance and ray overrides: its OPAQUE flag or, "If the intersection candidate is
 // with a geometry with an associated opacity micromap and VK_GEOMETRY_INSTANCE_DISABLE_OPACITY_MICROMAPS_BIT_KHR is
@@ -134,7 +147,10 @@ inline bool acceptTriangleHit(float tMin, float tMax, uint32_t rayFlags, uint32_
     bool opaque;
     if (!geometryOpacity(recordFlags, instanceFlags, rayFlags, id, out.hit, opaque)) return false;
     out.opaque = resolveOpacity(opaque, instanceFlags, rayFlags);
-    return !culledByOpacity(out.opaque, rayFlags);
+    if (culledByOpacity(out.opaque, rayFlags)) return false;
+    // An opaque hit needs no region: it is never shown to the application, and every fragment of a triangle meets
+    // the ray at the same t, which the strict interval drops once one of them is committed.
+    return out.opaque || !(recordFlags & format::kTriangleFragment) || fragmentReports(id, out.hit);
 }
 
 // Whether the ray, in [tMin, tMax] (exclusive for triangles), meets the triangle with record flags `recordFlags` at
@@ -152,27 +168,18 @@ inline bool triangleCandidate(const ShearedRay& r, float tMin, float tMax, uint3
 // functions already computed): the ray query and both batch kernels take the lanes of a leaf through it, in order.
 // Its first half, the intersection (unless the triangle is degenerate), is leafLaneHit: a packet of rays
 // (packet_kernel_body.hpp) looks at t before the interval test, to find ties.
-// A fragment of a split triangle (format/fragment_section.hpp) meets the ray only where the hit point lies in its
-// region, so that a triangle stored in several records is hit once.
-inline bool leafLaneHit(const std::byte* blas, const format::ConstTriangleLeaf& leaf, uint32_t lane0, uint32_t lane,
-                        const FourLaneEdges& e, const ShearedRay& r, TriangleHit& hit) {
-    const uint32_t flags = leaf.flags(lane0 + lane);
-    if (flags & format::kTriangleDegenerate) return false;
-    if (!laneIntersection(leaf, lane0, lane, e, r, hit)) return false;
-    if (!(flags & format::kTriangleFragment)) return true;
-    const uint64_t record = uint64_t(leaf.base - format::records(blas)) / format::kTriangleBytes + lane0 + lane;
-    const format::FragmentEntry* fragment = format::findFragment(blas, uint32_t(record));
-    float v[3][3];
-    leaf.positions(lane0 + lane, v);
-    return !fragment || format::fragmentHolds(*fragment, v, hit.b, hit.c);
+inline bool leafLaneHit(const format::ConstTriangleLeaf& leaf, uint32_t lane0, uint32_t lane, const FourLaneEdges& e,
+                        const ShearedRay& r, TriangleHit& hit) {
+    if (leaf.flags(lane0 + lane) & format::kTriangleDegenerate) return false;
+    return laneIntersection(leaf, lane0, lane, e, r, hit);
 }
 inline TriangleId leafTriangleId(const std::byte* blas, const format::ConstTriangleLeaf& leaf, uint32_t at) {
-    return {blas, leaf.geometryIndex(at), leaf.primitiveIndex()[at]};
+    return {blas, leaf.geometryIndex(at), leaf.primitiveIndex()[at], leaf, at};
 }
 inline bool leafLaneCandidate(const std::byte* blas, const format::ConstTriangleLeaf& leaf, uint32_t lane0,
                               uint32_t lane, const FourLaneEdges& e, const ShearedRay& r, float tMin, float tMax,
                               uint32_t rayFlags, uint32_t instanceFlags, TriangleCandidate& out) {
-    return leafLaneHit(blas, leaf, lane0, lane, e, r, out.hit) &&
+    return leafLaneHit(leaf, lane0, lane, e, r, out.hit) &&
            acceptTriangleHit(tMin, tMax, rayFlags, instanceFlags, leaf.flags(lane0 + lane),
                              leafTriangleId(blas, leaf, lane0 + lane), out);
 }
