@@ -143,13 +143,14 @@ struct SweepResult {
     uint32_t leftCount = 0, rightCount = 0;
 };
 
-// kBins boxes (SSE, lanes 0-2) with counts, and the SAH sweep over their planes. Bins estimate a split's cost, so
-// they need no NaN rule: the builder's own bounds (Box) keep it.
+// Up to kBins boxes (SSE, lanes 0-2) with counts, and the SAH sweep over their planes. Bins estimate a split's cost,
+// so they need no NaN rule: the builder's own bounds (Box) keep it.
 struct SimdBins {
+    uint32_t used;  // bins in use
     __m128 lo[kBins], hi[kBins];
-    uint32_t count[kBins] = {};
-    SimdBins() {
-        for (uint32_t b = 0; b < kBins; ++b) lo[b] = _mm_set1_ps(kInf), hi[b] = _mm_set1_ps(-kInf);
+    uint32_t count[kBins];
+    explicit SimdBins(uint32_t n = kBins) : used(n) {  // only the bins in use are initialised
+        for (uint32_t b = 0; b < n; ++b) lo[b] = _mm_set1_ps(kInf), hi[b] = _mm_set1_ps(-kInf), count[b] = 0;
     }
     void grow(uint32_t b, __m128 l, __m128 h) { lo[b] = _mm_min_ps(lo[b], l), hi[b] = _mm_max_ps(hi[b], h); }
     void add(uint32_t b, __m128 l, __m128 h) { grow(b, l, h), ++count[b]; }
@@ -170,7 +171,7 @@ struct SimdBins {
         uint32_t rightN[kBins];
         __m128 l = _mm_set1_ps(kInf), h = _mm_set1_ps(-kInf);
         uint32_t n = 0;
-        for (uint32_t b = kBins; b-- > 1;) {
+        for (uint32_t b = used; b-- > 1;) {
             l = _mm_min_ps(l, lo[b]), h = _mm_max_ps(h, hi[b]);
             n += rightCounts[b];
             rightBoxes[b] = toBox(l, h), rightN[b] = n;
@@ -178,7 +179,7 @@ struct SimdBins {
         SweepResult best;
         l = _mm_set1_ps(kInf), h = _mm_set1_ps(-kInf);
         n = 0;
-        for (uint32_t b = 0; b + 1 < kBins; ++b) {
+        for (uint32_t b = 0; b + 1 < used; ++b) {
             l = _mm_min_ps(l, lo[b]), h = _mm_max_ps(h, hi[b]);
             n += leftCounts[b];
             const uint32_t nr = rightN[b + 1];
@@ -197,23 +198,26 @@ struct SimdBins {
 
 // The object bins of a range (as the SAH builder's, sah_builder.cpp): lower + upper, twice a centroid, binned over
 // the range's bounds doubled, so no pass gathers centroid bounds; NaN lands in bin 0 and +inf in the last.
+// A range of fewer than kBins references gets as many bins (at least 4), as in the SAH builder: the sweep over
+// unused bins would cost more than the binning.
 struct ObjectBinning {
+    uint32_t bins;
     __m128 origin, scale;
     bool usable[3];
-    explicit ObjectBinning(const Box& bounds) {
+    ObjectBinning(const Box& bounds, uint32_t count) : bins(std::max(4u, std::min(kBins, count))) {
         float o[3], sc[3];
         for (int a = 0; a < 3; ++a) {
             o[a] = bounds.lo[a] + bounds.lo[a];
             const float extent = (bounds.hi[a] + bounds.hi[a]) - o[a];
             usable[a] = extent > 0.0f && std::isfinite(extent);
-            sc[a] = usable[a] ? float(kBins) * 0.99999f / extent : 0.0f;
+            sc[a] = usable[a] ? float(bins) * 0.99999f / extent : 0.0f;
         }
         origin = _mm_setr_ps(o[0], o[1], o[2], 0.0f);
         scale = _mm_setr_ps(sc[0], sc[1], sc[2], 0.0f);
     }
     __m128i binsOf(__m128 lo, __m128 hi) const {
         const __m128 f = _mm_mul_ps(_mm_sub_ps(_mm_add_ps(lo, hi), origin), scale);
-        return _mm_cvttps_epi32(_mm_min_ps(_mm_max_ps(f, _mm_setzero_ps()), _mm_set1_ps(float(kBins - 1))));
+        return _mm_cvttps_epi32(_mm_min_ps(_mm_max_ps(f, _mm_setzero_ps()), _mm_set1_ps(float(bins - 1))));
     }
 };
 
@@ -261,7 +265,7 @@ public:
         if (depth >= format::kSahDepthLimit) {
             halve(r, left, right);
         } else {
-            const ObjectBinning binning(bounds);
+            const ObjectBinning binning(bounds, r.count());
             const ObjectSplit object = findObjectSplit(r, binning);
             bool done = false;
             if (r.room() != 0 && bounds.finite() && object.axis >= 0 &&
@@ -319,7 +323,7 @@ private:
     ObjectSplit findObjectSplit(const Range& r, const ObjectBinning& binning) const {
         ObjectSplit best;
         if (!binning.usable[0] && !binning.usable[1] && !binning.usable[2]) return best;
-        SimdBins bins[3];
+        SimdBins bins[3] = {SimdBins(binning.bins), SimdBins(binning.bins), SimdBins(binning.bins)};
         for (uint32_t i = r.begin; i < r.end; ++i) {
             const PrimRef& ref = work_[i];
             const __m128 lo = loadLower(ref), hi = loadUpper(ref);
