@@ -2,8 +2,13 @@
 // (docs/FORMAT.md, "Fragments") shows a ray every triangle it meets exactly once, as the brute-force oracle lists
 // them: every candidate of a query that confirms none (non-opaque geometry, and opaque geometry under the NoOpaque
 // ray flag), with and without NO_DUPLICATE_ANY_HIT_INVOCATION; closest and any hits of queries and vkasTraceRays
-// match the oracle as for any other build.
+// match the oracle as for any other build; a serialized structure with fragments loads and traces the same, and so
+// does the committed blob tests/data/serialized_fragments_blas.bin (written by DISABLED_generate_golden_blob), which
+// every later vkas must keep loading.
+#include <cstdlib>
 #include <cstring>
+#include <fstream>
+#include <iterator>
 #include <set>
 #include <tuple>
 
@@ -46,6 +51,55 @@ protected:
                   << fragmentCount(blas) << " fragments" << std::endl;
         if (blasOut) *blasOut = blas;
         return buildSingleInstanceTlas(blas);
+    }
+
+    // A blob of vkCopyAccelerationStructureToMemoryKHR, and the structure vkCopyMemoryToAccelerationStructureKHR
+    // makes of it (seen by the oracle as `like`'s geometry).
+    std::vector<uint8_t> serialize(const AccelStruct* src) {
+        uint64_t n = 0;
+        VkAccelerationStructureKHR h = src->handle;
+        EXPECT_EQ(vk.vkWriteAccelerationStructuresPropertiesKHR(
+                      device, 1, &h, VK_QUERY_TYPE_ACCELERATION_STRUCTURE_SERIALIZATION_SIZE_KHR, sizeof n, &n, sizeof n),
+                  VK_SUCCESS);
+        std::vector<uint8_t> blob(n);
+        VkCopyAccelerationStructureToMemoryInfoKHR info{VK_STRUCTURE_TYPE_COPY_ACCELERATION_STRUCTURE_TO_MEMORY_INFO_KHR};
+        info.src = src->handle;
+        info.dst.hostAddress = blob.data();
+        info.mode = VK_COPY_ACCELERATION_STRUCTURE_MODE_SERIALIZE_KHR;
+        EXPECT_EQ(vk.vkCopyAccelerationStructureToMemoryKHR(device, VK_NULL_HANDLE, &info), VK_SUCCESS);
+        return blob;
+    }
+    AccelStruct* deserialize(const std::vector<uint8_t>& blob, const AccelStruct* like) {
+        uint64_t deserializedSize;
+        std::memcpy(&deserializedSize, blob.data() + 40, 8);
+        AccelStruct* dst = createAccelStruct(VK_ACCELERATION_STRUCTURE_TYPE_BOTTOM_LEVEL_KHR, deserializedSize, {});
+        VkCopyMemoryToAccelerationStructureInfoKHR info{VK_STRUCTURE_TYPE_COPY_MEMORY_TO_ACCELERATION_STRUCTURE_INFO_KHR};
+        info.src.hostAddress = blob.data();
+        info.dst = dst->handle;
+        info.mode = VK_COPY_ACCELERATION_STRUCTURE_MODE_DESERIALIZE_KHR;
+        EXPECT_EQ(vk.vkCopyMemoryToAccelerationStructureKHR(device, VK_NULL_HANDLE, &info), VK_SUCCESS);
+        dst->blas = like->blas;
+        blasRegistry[dst->reference()] = dst->blas;
+        return dst;
+    }
+
+    // The golden blob's geometry: 300 large overlapping triangles from a fixed LCG and exact float arithmetic, so
+    // that every build of the test makes the same vertices.
+    static Mesh goldenMesh() {
+        Mesh m;
+        uint64_t state = 0x5eed'f4a9'7e11'0001ull;
+        auto next = [&] {  // a multiple of 1/256 in [-1, 1)
+            state = state * 6364136223846793005ull + 1442695040888963407ull;
+            return float(int32_t(state >> 55) - 256) / 256.0f;
+        };
+        for (int i = 0; i < 300; ++i) {
+            const float c[3] = {4 * next(), 4 * next(), 4 * next()};
+            for (int k = 0; k < 3; ++k) {
+                m.positions.push_back({c[0] + 2 * next(), c[1] + 2 * next(), c[2] + 2 * next()});
+                m.indices.push_back(uint32_t(m.positions.size() - 1));
+            }
+        }
+        return m;
     }
 
     std::vector<oracle::Ray> rays(const AccelStruct* tlas, size_t n) {
@@ -116,7 +170,7 @@ TEST_F(spatial_splits, closest_and_any_hits_match_the_oracle) {
     }
 }
 
-TEST_F(spatial_splits, the_same_inputs_build_the_same_bytes_and_copies_keep_the_fragments) {
+TEST_F(spatial_splits, the_same_inputs_build_the_same_bytes_within_the_size_query) {
     const auto g = geometries(VK_GEOMETRY_OPAQUE_BIT_KHR);
     AccelStruct* blas = nullptr;
     AccelStruct* tlas = splitScene(g, &blas);
@@ -128,6 +182,58 @@ TEST_F(spatial_splits, the_same_inputs_build_the_same_bytes_and_copies_keep_the_
     EXPECT_EQ(std::memcmp(blas->data(), twin->data(), size_t(used)), 0);
     (void)tlas;
 }
+
+TEST_F(spatial_splits, a_serialized_structure_keeps_its_fragments_and_candidates) {
+    const auto g = geometries(0);
+    AccelStruct* blas = nullptr;
+    splitScene(g, &blas);
+    AccelStruct* copy = deserialize(serialize(blas), blas);
+    uint64_t used;
+    std::memcpy(&used, blas->data() + 16, 8);
+    EXPECT_EQ(std::memcmp(blas->data(), copy->data(), size_t(used)), 0);
+    AccelStruct* tlas = buildSingleInstanceTlas(copy);
+    const auto rs = rays(tlas, 200);
+    EXPECT_GT(checkCandidateSets(tlas, rs, 0), rs.size());
+}
+
+#ifdef VKAS_TEST_DATA_DIR
+// Run with --gtest_also_run_disabled_tests and VKAS_WRITE_TEST_DATA=<dir> to write the golden blob.
+TEST_F(spatial_splits, DISABLED_generate_golden_blob) {
+    const char* dir = std::getenv("VKAS_WRITE_TEST_DATA");
+    ASSERT_NE(dir, nullptr) << "set VKAS_WRITE_TEST_DATA to the output directory";
+    auto g = makeGeometry(goldenMesh(), VK_INDEX_TYPE_NONE_KHR, 0);
+    BuildOptions opt;
+    opt.flags = VK_BUILD_ACCELERATION_STRUCTURE_PREFER_FAST_TRACE_BIT_KHR;
+    AccelStruct* blas = buildBlas(*g, opt);
+    ASSERT_GT(fragmentCount(blas), 0u);
+    const std::vector<uint8_t> blob = serialize(blas);
+    std::ofstream(std::string(dir) + "/serialized_fragments_blas.bin", std::ios::binary)
+        .write(reinterpret_cast<const char*>(blob.data()), std::streamsize(blob.size()));
+}
+
+// The blob vkas wrote when fragments were introduced (f99d842) loads, keeps its fragments, and shows every ray each
+// triangle it meets once, as the oracle over the same (regenerated) geometry says.
+TEST_F(spatial_splits, the_golden_blob_with_fragments_loads_and_traces) {
+    std::ifstream f(std::string(VKAS_TEST_DATA_DIR) + "/serialized_fragments_blas.bin", std::ios::binary);
+    ASSERT_TRUE(f.good());
+    const std::vector<uint8_t> blob((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+    VkAccelerationStructureVersionInfoKHR vi{VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_VERSION_INFO_KHR};
+    vi.pVersionData = blob.data();
+    VkAccelerationStructureCompatibilityKHR c;
+    vk.vkGetDeviceAccelerationStructureCompatibilityKHR(device, &vi, &c);
+    ASSERT_EQ(c, VK_ACCELERATION_STRUCTURE_COMPATIBILITY_COMPATIBLE_KHR);
+    auto g = makeGeometry(goldenMesh(), VK_INDEX_TYPE_NONE_KHR, 0);
+    BuildOptions opt;
+    opt.flags = VK_BUILD_ACCELERATION_STRUCTURE_PREFER_FAST_TRACE_BIT_KHR;
+    AccelStruct* fresh = buildBlas(*g, opt);  // for the oracle's view of the geometry
+    AccelStruct* loaded = deserialize(blob, fresh);
+    EXPECT_GT(fragmentCount(loaded), 0u);
+    EXPECT_EQ(primitiveCount(loaded), 300u);
+    AccelStruct* tlas = buildSingleInstanceTlas(loaded);
+    const auto rs = rays(tlas, 300);
+    EXPECT_GT(checkCandidateSets(tlas, rs, 0), rs.size());
+}
+#endif
 
 }  // namespace
 }  // namespace vt
