@@ -115,6 +115,16 @@ int main(int argc, char** argv) {
                                        VK_BUILD_ACCELERATION_STRUCTURE_ALLOW_UPDATE_BIT_KHR);
         writeBlob(d, mesh, dir + "/deserialize/blas_mesh120.bin");
         d.destroyStructure(mesh);
+        // The same count of larger, overlapping triangles built with PREFER_FAST_TRACE: spatial splits cut some, so
+        // the blob has fragment records and a fragment section (docs/FORMAT.md, "Fragments").
+        for (size_t i = 0; i < v.size(); i += 9) {
+            const float c[3] = {rng.uniform(-5, 5), rng.uniform(-5, 5), rng.uniform(-5, 5)};
+            for (int k = 0; k < 9; ++k) v[i + k] = c[k % 3] + rng.uniform(-3.0f, 3.0f);
+        }
+        Structure cut = d.buildSimple(VK_ACCELERATION_STRUCTURE_TYPE_BOTTOM_LEVEL_KHR, g, uint32_t(v.size() / 9),
+                                      VK_BUILD_ACCELERATION_STRUCTURE_PREFER_FAST_TRACE_BIT_KHR);
+        writeBlob(d, cut, dir + "/deserialize/blas_fragments120.bin");
+        d.destroyStructure(cut);
     }
     {
         // A bottom level that uses an opacity micromap (VK_EXT_opacity_micromap): its blob holds the opacity section

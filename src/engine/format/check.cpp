@@ -274,6 +274,9 @@ CheckResult checkBlock(const std::byte* block, uint64_t size) {
             if (load32(rec + at + 4) >= primitivesOf(geometry)) return corrupt("a record's primitiveIndex is out of range");
             if (h.primitiveType == VK_GEOMETRY_TYPE_TRIANGLES_KHR && micromapMissing(load32(rec + at + 8), geometry))
                 return corrupt("a triangle asks for an opacity micromap its geometry does not have");
+            // Only format-2 triangle leaves hold fragments (fragment_section.hpp).
+            if (h.primitiveType == VK_GEOMETRY_TYPE_TRIANGLES_KHR && (load32(rec + at + 8) & kTriangleFragment))
+                return corrupt("a triangle record outside triangle leaves is flagged as a fragment");
         }
     }
     return {};

@@ -107,6 +107,7 @@ struct TriangleId {
 // A fragment of a triangle that spatial splits cut into several records (format/fragment_section.hpp) reports a hit
 // only where the hit point lies in its region, so that the triangle is shown to a ray once.
 inline bool fragmentReports(const TriangleId& id, const TriangleHit& hit) {
+    if (!id.leaf.base) return true;  // not a format-2 leaf ([NV-motion] records): never cut (format/check.cpp)
     const uint64_t record = uint64_t(id.leaf.base - format::records(id.blas)) / format::kTriangleBytes + id.lane;
     const format::FragmentEntry* fragment = format::findFragment(id.blas, uint32_t(record));
     float v[3][3];
