@@ -20,7 +20,7 @@ namespace {
 constexpr uint32_t kBins = 32;
 // Spatial splits are looked for only where the best object split's two boxes overlap by more than this fraction of
 // the root's surface area (Stich et al.'s alpha): elsewhere they rarely win and their binning costs the most. Stich
-// et al. use 1e-5; 1e-4 builds 20-35% faster for 0.2-0.3% more traversal instructions (docs/PERFORMANCE.md).
+// et al. use 1e-5; 1e-4 builds 15-35% faster for 0.2% more traversal instructions (docs/PERFORMANCE.md).
 constexpr double kOverlapFraction = 1e-4;
 constexpr float kInf = std::numeric_limits<float>::infinity();
 
