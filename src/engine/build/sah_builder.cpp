@@ -3,6 +3,7 @@
 
 #include <vulkan/vulkan_core.h>
 
+#include "engine/build/centroid_bins.hpp"
 #include "engine/util/simd_box.hpp"
 
 #include <algorithm>
@@ -237,20 +238,13 @@ private:
             axes[0] = extent.x >= extent.y && extent.x >= extent.z ? 0 : extent.y >= extent.z ? 1 : 2;
             axisCount = 1;
         }
-        float scale[3] = {0.0f, 0.0f, 0.0f};
-        for (int k = 0; k < axisCount; ++k) {
-            const int a = axes[k];
-            scale[a] = extent[a] > 0 ? (float(binCount) * 0.99999f) / extent[a] : 0.0f;
-        }
-        const __m128 origin = _mm_set_ps(0.0f, cl.z, cl.y, cl.x);
-        const __m128 scale4 = _mm_set_ps(0.0f, scale[2], scale[1], scale[0]);
-        const __m128 lastBin = _mm_set1_ps(float(binCount - 1));
-        // The bins of a primitive along x, y, z: clamped in float first, so NaN lands in bin 0 and +inf in the
-        // last (invalid input still gets valid bins), then truncated.
-        auto binsOf = [&](__m128 lo, __m128 up) {
-            const __m128 f = _mm_mul_ps(_mm_sub_ps(_mm_add_ps(lo, up), origin), scale4);
-            return _mm_cvttps_epi32(_mm_min_ps(_mm_max_ps(f, _mm_setzero_ps()), lastBin));
-        };
+        bool binned[3] = {false, false, false};
+        for (int k = 0; k < axisCount; ++k) binned[axes[k]] = true;
+        const float lower[3] = {r.bounds.lower.x, r.bounds.lower.y, r.bounds.lower.z};
+        const float upper[3] = {r.bounds.upper.x, r.bounds.upper.y, r.bounds.upper.z};
+        const CentroidBins binning(lower, upper, binCount, binned);  // (centroid_bins.hpp)
+        const float* scale = binning.axisScale;
+        auto binsOf = [&](__m128 lo, __m128 up) { return binning.of(lo, up); };
         Bins bins(binCount);
         // A large range bins every stride-th primitive from its first (binSampleTarget); the sample's indices
         // depend on the range alone, never on the chunks, so threads see the same sample.
@@ -323,12 +317,11 @@ private:
 
         // Partition (primitives in bins <= bestBin go left).
         // bin <= bestBin, decided on the split axis alone: the bin is trunc(clamp(f, 0, last)) with NaN in bin 0, and
-        // bestBin + 1 <= last, so it is !(f >= bestBin + 1) with f computed as binsOf computes it.
+        // bestBin + 1 <= last, so it is !(f >= bestBin + 1) with f the bins' position (CentroidBins::position).
         const __m128 splitLimit = _mm_set1_ps(float(bestBin + 1));
         const int axisBit = 1 << bestAxis;
         auto goesLeft = [=](__m128 lo, __m128 up) {
-            const __m128 f = _mm_mul_ps(_mm_sub_ps(_mm_add_ps(lo, up), origin), scale4);
-            return (_mm_movemask_ps(_mm_cmpge_ps(f, splitLimit)) & axisBit) == 0;
+            return (_mm_movemask_ps(_mm_cmpge_ps(binning.position(lo, up), splitLimit)) & axisBit) == 0;
         };
         // Large ranges: stably through the spare array, in chunks that may run on several threads, each side's
         // bounds gathered on the way (merged in chunk order: the same bytes with threads or without).

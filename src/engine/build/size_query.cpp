@@ -12,15 +12,19 @@ uint64_t gatheredRecordSize(format::StructureType type, bool motion) {
     return motion ? sizeof(format::MotionTriangleRecord) : sizeof(format::TriangleRecord);
 }
 
-StructureSizes structureSizes(const VkAccelerationStructureBuildGeometryInfoKHR& info, uint64_t primitiveCount) {
-    const format::StructureType type = info.type == VK_ACCELERATION_STRUCTURE_TYPE_TOP_LEVEL_KHR
-                                           ? format::StructureType::TopLevel
-                                           : format::StructureType::BottomLevel;
-    const bool motion = usesMotionRecords(info);
+BvhBuildSettings structureBuildSettings(const VkAccelerationStructureBuildGeometryInfoKHR& info,
+                                        uint64_t primitiveCount) {
+    const format::StructureType type = structureTypeOf(uint32_t(info.type));  // (the enum's values are Vulkan's)
     BvhBuildSettings settings = buildSettingsFor(maxLeafSize(type), info.flags);
-    // The most a build of these counts may use: with spatial splits, records and workspace for the split budget.
-    if (settings.quality && usesSpatialSplits(type, recordPrimitiveType(info), motion, info.flags))
+    if (settings.quality && usesSpatialSplits(type, recordPrimitiveType(info), usesMotionRecords(info), info.flags))
         settings.splitBudget = uint32_t(spatialSplitBudget(primitiveCount));
+    return settings;
+}
+
+StructureSizes structureSizes(const VkAccelerationStructureBuildGeometryInfoKHR& info, uint64_t primitiveCount) {
+    const format::StructureType type = structureTypeOf(uint32_t(info.type));  // (the enum's values are Vulkan's)
+    const bool motion = usesMotionRecords(info);
+    const BvhBuildSettings settings = structureBuildSettings(info, primitiveCount);
     StructureSizes s;
     s.structureSize =
         maxStructureSize(type, recordPrimitiveType(info), info.geometryCount, primitiveCount, motion, info.flags);

@@ -8,6 +8,7 @@
 #include <cstddef>
 #include <cstdint>
 
+#include "engine/build/tree_builder.hpp"
 #include "engine/format/layout.hpp"
 
 namespace vkas {
@@ -21,6 +22,12 @@ struct StructureSizes {
 // A safe upper bound for any build of `info`'s kind (type, record type, motion, geometry count) of `primitiveCount`
 // primitives (or instances).
 StructureSizes structureSizes(const VkAccelerationStructureBuildGeometryInfoKHR& info, uint64_t primitiveCount);
+
+// The tree builder's settings for a build of `info`'s kind of `primitiveCount` primitives: the selector's
+// (buildSettingsFor), with the spatial-split budget where format/sizes.hpp's usesSpatialSplits allows cuts. The size
+// query and the build both take them from here, so the scratch reserved is the scratch used.
+BvhBuildSettings structureBuildSettings(const VkAccelerationStructureBuildGeometryInfoKHR& info,
+                                        uint64_t primitiveCount);
 
 // Bytes of the temporary record a build gathers per primitive into its scratch (a format::TriangleRecord for
 // triangles, whatever their stored form; the stored record for every other kind).

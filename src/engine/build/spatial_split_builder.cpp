@@ -8,6 +8,7 @@
 #include <limits>
 
 #include "engine/build/binary_tree.hpp"
+#include "engine/build/centroid_bins.hpp"
 #include "engine/build/quality_builder.hpp"
 #include "engine/build/wide_collapse.hpp"
 #include "engine/format/layout.hpp"
@@ -196,31 +197,6 @@ struct SimdBins {
     }
 };
 
-// The object bins of a range (as the SAH builder's, sah_builder.cpp): lower + upper, twice a centroid, binned over
-// the range's bounds doubled, so no pass gathers centroid bounds; NaN lands in bin 0 and +inf in the last.
-// A range of fewer than kBins references gets as many bins (at least 4), as in the SAH builder: the sweep over
-// unused bins would cost more than the binning.
-struct ObjectBinning {
-    uint32_t bins;
-    __m128 origin, scale;
-    bool usable[3];
-    ObjectBinning(const Box& bounds, uint32_t count) : bins(std::max(4u, std::min(kBins, count))) {
-        float o[3], sc[3];
-        for (int a = 0; a < 3; ++a) {
-            o[a] = bounds.lo[a] + bounds.lo[a];
-            const float extent = (bounds.hi[a] + bounds.hi[a]) - o[a];
-            usable[a] = extent > 0.0f && std::isfinite(extent);
-            sc[a] = usable[a] ? float(bins) * 0.99999f / extent : 0.0f;
-        }
-        origin = _mm_setr_ps(o[0], o[1], o[2], 0.0f);
-        scale = _mm_setr_ps(sc[0], sc[1], sc[2], 0.0f);
-    }
-    __m128i binsOf(__m128 lo, __m128 hi) const {
-        const __m128 f = _mm_mul_ps(_mm_sub_ps(_mm_add_ps(lo, hi), origin), scale);
-        return _mm_cvttps_epi32(_mm_min_ps(_mm_max_ps(f, _mm_setzero_ps()), _mm_set1_ps(float(bins - 1))));
-    }
-};
-
 // The spatial bins of one axis of a range's bounds: kBins equal slabs; a coordinate's bin is decided by the planes
 // themselves, so that binning and partition agree.
 struct SpatialAxis {
@@ -265,8 +241,12 @@ public:
         if (depth >= format::kSahDepthLimit) {
             halve(r, left, right);
         } else {
-            const ObjectBinning binning(bounds, r.count());
-            const ObjectSplit object = findObjectSplit(r, binning);
+            // As many object bins as references below kBins (at least 4), as in the SAH builder: the sweep over
+            // unused bins would cost more than the binning.
+            const uint32_t binCount = std::max(4u, std::min(kBins, r.count()));
+            const bool all[3] = {true, true, true};
+            const CentroidBins binning(bounds.lo, bounds.hi, int(binCount), all);
+            const ObjectSplit object = findObjectSplit(r, binning, binCount);
             bool done = false;
             if (r.room() != 0 && bounds.finite() && object.axis >= 0 &&
                 Box::intersection(object.left, object.right).halfArea() > overlapLimit_) {
@@ -282,15 +262,13 @@ public:
         }
         const uint32_t l = build(left, depth + 1, index);
         const uint32_t rr = build(right, depth + 1, index);
-        BinaryNode& self = tree_[index];  // (tree_ does not move; a reference for clarity)
-        self.child[0] = l;
-        self.child[1] = rr;
-        self.primCount = tree_[l].primCount + tree_[rr].primCount;
+        node.child[0] = l;
+        node.child[1] = rr;
+        node.primCount = tree_[l].primCount + tree_[rr].primCount;
         return index;
     }
 
     uint32_t nodeCount() const { return nodeCount_; }
-    uint32_t regionCount() const { return regionCount_; }
 
 private:
     static void setBox(BinaryNode& n, const Box& b) {
@@ -318,21 +296,22 @@ private:
         return SimdBins::toBox(lo, hi);
     }
 
-    // Binned SAH over the centroids, kBins bins on each axis, all three binned in one pass (ObjectBinning); ties go
-    // to the lower axis, then the lower bin.
-    ObjectSplit findObjectSplit(const Range& r, const ObjectBinning& binning) const {
+    // Binned SAH over the centroids (centroid_bins.hpp), binCount bins on each axis, all three binned in one pass;
+    // ties go to the lower axis, then the lower bin.
+    ObjectSplit findObjectSplit(const Range& r, const CentroidBins& binning, uint32_t binCount) const {
         ObjectSplit best;
-        if (!binning.usable[0] && !binning.usable[1] && !binning.usable[2]) return best;
-        SimdBins bins[3] = {SimdBins(binning.bins), SimdBins(binning.bins), SimdBins(binning.bins)};
+        const float* scale = binning.axisScale;
+        if (scale[0] == 0.0f && scale[1] == 0.0f && scale[2] == 0.0f) return best;
+        SimdBins bins[3] = {SimdBins(binCount), SimdBins(binCount), SimdBins(binCount)};
         for (uint32_t i = r.begin; i < r.end; ++i) {
             const PrimRef& ref = work_[i];
             const __m128 lo = loadLower(ref), hi = loadUpper(ref);
             alignas(16) int32_t b[4];
-            _mm_store_si128(reinterpret_cast<__m128i*>(b), binning.binsOf(lo, hi));
+            _mm_store_si128(reinterpret_cast<__m128i*>(b), binning.of(lo, hi));
             bins[0].add(uint32_t(b[0]), lo, hi), bins[1].add(uint32_t(b[1]), lo, hi), bins[2].add(uint32_t(b[2]), lo, hi);
         }
         for (int a = 0; a < 3; ++a) {
-            if (!binning.usable[a]) continue;
+            if (scale[a] == 0.0f) continue;
             SweepResult sweep = bins[a].sweep(bins[a].count, bins[a].count);
             if (sweep.bin < kBins && sweep.cost < best.cost) {
                 best.cost = sweep.cost, best.axis = a, best.bin = sweep.bin;
@@ -426,13 +405,13 @@ private:
         right = {rightBegin, rightBegin + nr, r.capEnd};
     }
 
-    void objectPartition(const Range& r, const ObjectBinning& binning, const ObjectSplit& s, Range& left,
+    void objectPartition(const Range& r, const CentroidBins& binning, const ObjectSplit& s, Range& left,
                          Range& right) {
         uint32_t nl = 0, nr = 0;
         for (uint32_t i = r.begin; i < r.end; ++i) {
             const PrimRef& ref = work_[i];
             alignas(16) int32_t b[4];
-            _mm_store_si128(reinterpret_cast<__m128i*>(b), binning.binsOf(loadLower(ref), loadUpper(ref)));
+            _mm_store_si128(reinterpret_cast<__m128i*>(b), binning.of(loadLower(ref), loadUpper(ref)));
             if (uint32_t(b[s.axis]) <= s.bin)
                 spare_[r.begin + nl++] = ref;
             else

@@ -149,7 +149,7 @@ void writeTriangleLeaf(std::byte* records, const std::byte* temp, const PrimRef*
 }
 
 // The fragment section (format/fragment_section.hpp): the region of every fragment, in record order.
-uint32_t writeFragments(std::byte* dst, const StructureLayout& layout, const BvhBuildResult& tree) {
+void writeFragments(std::byte* dst, const StructureLayout& layout, const BvhBuildResult& tree) {
     uint32_t count = 0;
     for (uint32_t i = 0; i < tree.refCount; ++i) {
         const PrimRef& ref = tree.refs[i];
@@ -162,7 +162,6 @@ uint32_t writeFragments(std::byte* dst, const StructureLayout& layout, const Bvh
         std::memcpy(e.upper, region.upper, sizeof e.upper);
         std::memcpy(dst + layout.fragmentOffset + uint64_t(count++) * sizeof e, &e, sizeof e);
     }
-    return count;
 }
 
 uint32_t countFragments(const BvhBuildResult& tree) {
@@ -215,13 +214,11 @@ VkResult buildAccelerationStructure(const BuildJob& job) {
 
     const StructureLayout pre = structureLayout(type, primitiveType, info.geometryCount, 0, 0, motion);
     auto* nodes = reinterpret_cast<Node*>(job.dst + pre.nodeOffset);
-    BvhBuildSettings settings = buildSettingsFor(maxLeafSize(type), info.flags);
+    BvhBuildSettings settings = structureBuildSettings(info, n);
     // PREFER_FAST_TRACE may cut triangles at planes (build/spatial_split_builder.hpp), not with micromaps, whose
     // section follows the records.
-    if (settings.quality && opacityBound == 0 && usesSpatialSplits(type, primitiveType, motion, info.flags)) {
-        settings.splitBudget = uint32_t(spatialSplitBudget(n));
-        settings.triangles = reinterpret_cast<const TriangleRecord*>(temp);
-    }
+    if (opacityBound != 0) settings.splitBudget = 0;
+    if (settings.splitBudget != 0) settings.triangles = reinterpret_cast<const TriangleRecord*>(temp);
     BvhBuildResult tree = buildTree(refs, n, settings, nodes, workspace, job.parallel);
     if (!tree.refs) tree.refs = refs, tree.refCount = n;
     const uint32_t recordCount = tree.refCount;
