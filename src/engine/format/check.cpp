@@ -123,18 +123,15 @@ const char* checkOpacitySection(const std::byte* block, const Header& h, HostVec
     return nullptr;
 }
 
-}  // namespace
-
 // The fragment section (fragment_section.hpp): where the layout puts it, inside usedSize, entries sorted by record,
 // each inside the record array with a non-empty region. Zero offset and count without fragments.
-static const char* checkFragmentSection(const std::byte* block, const Header& h, bool triangleLeaves, uint64_t recordTail) {
+const char* checkFragmentSection(const std::byte* block, const Header& h, bool triangleLeaves, uint64_t recordTail) {
     if (h.reserved1 != 0) return "a reserved header field is not zero";
     if (h.fragmentCount == 0) return h.fragmentOffset != 0 ? "a fragment section offset without fragments" : nullptr;
     if (!triangleLeaves) return "fragments in a structure without triangle leaves";
     if (h.opacityOffset != 0 || h.opacityReserved != 0) return "fragments in a structure with opacity micromaps";
     const uint64_t recordEnd = h.recordOffset + uint64_t(h.recordCount) * kTriangleBytes + recordTail;
-    const uint64_t expected = (recordEnd + kFragmentAlignment - 1) / kFragmentAlignment * kFragmentAlignment;
-    if (h.fragmentOffset != expected) return "the fragment section does not follow the records";
+    if (h.fragmentOffset != fragmentSectionOffset(recordEnd)) return "the fragment section does not follow the records";
     if (h.fragmentOffset > h.usedSize || uint64_t(h.fragmentCount) * sizeof(FragmentEntry) > h.usedSize - h.fragmentOffset)
         return "the fragment section does not fit in usedSize";
     if (h.fragmentCount > h.recordCount) return "more fragments than records";
@@ -151,6 +148,8 @@ static const char* checkFragmentSection(const std::byte* block, const Header& h,
     }
     return nullptr;
 }
+
+}  // namespace
 
 CheckResult checkBlock(const std::byte* block, uint64_t size) {
     if (!block || size < sizeof(Header)) return corrupt("the block is shorter than its header");

@@ -28,6 +28,10 @@ struct FragmentEntry {
 static_assert(sizeof(FragmentEntry) == 32);
 
 constexpr uint64_t kFragmentAlignment = 16;
+// Where the section starts: the first aligned byte at or after the end of the triangle array (its tail included).
+constexpr uint64_t fragmentSectionOffset(uint64_t recordsEnd) {
+    return (recordsEnd + kFragmentAlignment - 1) / kFragmentAlignment * kFragmentAlignment;
+}
 
 inline const FragmentEntry* fragments(const std::byte* base) {
     return reinterpret_cast<const FragmentEntry*>(base + header(base)->fragmentOffset);

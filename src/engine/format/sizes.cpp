@@ -24,7 +24,7 @@ StructureLayout structureLayout(format::StructureType type, uint32_t primitiveTy
             recordTailSize(type, primitiveType, motion, recordCount);
     l.fragmentOffset = 0;
     if (fragmentCount != 0) {
-        l.fragmentOffset = alignUp(l.end, format::kFragmentAlignment);
+        l.fragmentOffset = format::fragmentSectionOffset(l.end);
         l.end = l.fragmentOffset + fragmentCount * sizeof(format::FragmentEntry);
     }
     return l;
