@@ -163,17 +163,19 @@ TEST_F(SpatialSplits, every_point_of_a_triangle_has_exactly_one_fragment_whose_b
             float b = rng.uniformf(0, 1), c = rng.uniformf(0, 1);
             if (b + c > 1) b = 1 - b, c = 1 - c;
             if (s % 8 == 0) c = 0;
+            double p[3];
+            for (int a = 0; a < 3; ++a)
+                p[a] = double(recs[0].v[0][a]) + double(b) * (double(recs[0].v[1][a]) - recs[0].v[0][a]) +
+                       double(c) * (double(recs[0].v[2][a]) - recs[0].v[0][a]);
             uint32_t holders = 0;
             for (const Record& r : recs) {
                 const format::FragmentEntry* e = format::findFragment(block.data(), r.index);
                 ASSERT_NE(e, nullptr);
-                if (!format::fragmentHolds(*e, recs[0].v, b, c)) continue;
+                if (!format::fragmentHolds(*e, p)) continue;
                 ++holders;
                 for (int a = 0; a < 3; ++a) {
-                    const double p = double(r.v[0][a]) + double(b) * (double(r.v[1][a]) - r.v[0][a]) +
-                                     double(c) * (double(r.v[2][a]) - r.v[0][a]);
-                    EXPECT_GE(p, r.box.lower[a]) << "primitive " << primitive << " axis " << a;
-                    EXPECT_LE(p, r.box.upper[a]) << "primitive " << primitive << " axis " << a;
+                    EXPECT_GE(p[a], r.box.lower[a]) << "primitive " << primitive << " axis " << a;
+                    EXPECT_LE(p[a], r.box.upper[a]) << "primitive " << primitive << " axis " << a;
                 }
             }
             EXPECT_EQ(holders, 1u) << "primitive " << primitive << " at b=" << b << " c=" << c;

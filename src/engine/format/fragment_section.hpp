@@ -51,15 +51,12 @@ inline const FragmentEntry* findFragment(const std::byte* base, uint32_t record)
     return lo < header(base)->fragmentCount && e[lo].record == record ? &e[lo] : nullptr;
 }
 
-// Whether the point of triangle v at barycentrics (b, c) lies in the region of fragment `e`. The point is computed
-// in double from the stored floats, the same for every fragment of the triangle (their records hold the same
-// positions and the ray meets them with the same arithmetic), so exactly one region holds it.
-inline bool fragmentHolds(const FragmentEntry& e, const float (*v)[3], float b, float c) {
-    for (int a = 0; a < 3; ++a) {
-        const double p = double(v[0][a]) + double(b) * (double(v[1][a]) - double(v[0][a])) +
-                         double(c) * (double(v[2][a]) - double(v[0][a]));
-        if (!(p >= double(e.lower[a]) && p < double(e.upper[a]))) return false;
-    }
+// Whether point p lies in the region of fragment `e`. Every fragment of a triangle is asked about the same point (the
+// trace computes it once per ray and triangle: trace/fragment_hit_point.hpp), and the regions partition space, so
+// exactly one of them holds it.
+inline bool fragmentHolds(const FragmentEntry& e, const double p[3]) {
+    for (int a = 0; a < 3; ++a)
+        if (!(p[a] >= double(e.lower[a]) && p[a] < double(e.upper[a]))) return false;
     return true;
 }
 

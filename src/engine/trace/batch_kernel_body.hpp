@@ -38,7 +38,7 @@ static inline void testTriangleLeaf(Walk& w, const std::byte* blas, format::Chil
                   w.committed->trianglePrimitiveIndex == leaf.primitiveIndex()[lane0 + lane] &&
                   w.committed->triangleGeometryIndex == leaf.geometryIndex(lane0 + lane)))
                 w.tied = true;
-            if (!acceptTriangleHit(w.tMin, w.tMax, w.flags, instanceFlags, leaf.flags(lane0 + lane),
+            if (!acceptTriangleHit(w.objectRay, w.tMin, w.tMax, w.flags, instanceFlags, leaf.flags(lane0 + lane),
                                    leafTriangleId(blas, leaf, lane0 + lane), c))
                 continue;
             float v[3][3];

@@ -7,6 +7,7 @@
 
 #include "engine/format/fragment_section.hpp"
 #include "engine/format/layout.hpp"
+#include "engine/trace/fragment_hit_point.hpp"
 #include "engine/trace/opacity_micromap.hpp"
 #include "engine/trace/ray.hpp"
 #include "engine/trace/triangle_leaf_test.hpp"
@@ -105,14 +106,20 @@ struct TriangleId {
 };
 
 // A fragment of a triangle that spatial splits cut into several records (format/fragment_section.hpp) reports a hit
-// only where the hit point lies in its region, so that the triangle is shown to a ray once.
-inline bool fragmentReports(const TriangleId& id, const TriangleHit& hit) {
+// only where the point where the ray meets the triangle lies in its region, so that the triangle is shown to a ray
+// once (the point is computed accurately enough that the fragment holding it is one the ray visits). The spec:
+// "VK_GEOMETRY_NO_DUPLICATE_ANY_HIT_INVOCATION_BIT_KHR specifies that the implementation must only call the any-hit
+// shader a single time for each primitive in this geometry"; vkas keeps that for every geometry.
+inline bool fragmentReports(const TriangleId& id, const ShearedRay& r, const TriangleHit& hit) {
     if (!id.leaf.base) return true;  // not a format-2 leaf ([NV-motion] records): never cut (format/check.cpp)
     const uint64_t record = uint64_t(id.leaf.base - format::records(id.blas)) / format::kTriangleBytes + id.lane;
     const format::FragmentEntry* fragment = format::findFragment(id.blas, uint32_t(record));
     float v[3][3];
     id.leaf.positions(id.lane, v);
-    return !fragment || format::fragmentHolds(*fragment, v, hit.b, hit.c);
+    if (!fragment) return true;
+    double p[3];
+    fragmentHitPoint(r, v, hit.b, hit.c, p);
+    return format::fragmentHolds(*fragment, p);
 }
 
 // The geometry's opacity before the instance and ray overrides: its OPAQUE flag or, "If the intersection candidate is
@@ -135,8 +142,8 @@ inline bool geometryOpacity(uint32_t recordFlags, uint32_t instanceFlags, uint32
 
 // What follows the intersection: the t interval (exclusive for triangles), the facing culls (unless the instance
 // disables culling) and opacity, for a triangle with record flags `recordFlags` that the ray covers at `out.hit`.
-inline bool acceptTriangleHit(float tMin, float tMax, uint32_t rayFlags, uint32_t instanceFlags, uint32_t recordFlags,
-                              const TriangleId& id, TriangleCandidate& out) {
+inline bool acceptTriangleHit(const ShearedRay& r, float tMin, float tMax, uint32_t rayFlags, uint32_t instanceFlags,
+                              uint32_t recordFlags, const TriangleId& id, TriangleCandidate& out) {
     if (!(out.hit.t > tMin && out.hit.t < tMax)) return false;  // strict for triangles
     bool front = out.hit.frontFace;
     if (instanceFlags & kInstanceFlipFacing) front = !front;
@@ -151,7 +158,7 @@ inline bool acceptTriangleHit(float tMin, float tMax, uint32_t rayFlags, uint32_
     if (culledByOpacity(out.opaque, rayFlags)) return false;
     // An opaque hit needs no region: it is never shown to the application, and every fragment of a triangle meets
     // the ray at the same t, which the strict interval drops once one of them is committed.
-    return out.opaque || !(recordFlags & format::kTriangleFragment) || fragmentReports(id, out.hit);
+    return out.opaque || !(recordFlags & format::kTriangleFragment) || fragmentReports(id, r, out.hit);
 }
 
 // Whether the ray, in [tMin, tMax] (exclusive for triangles), meets the triangle with record flags `recordFlags` at
@@ -162,7 +169,7 @@ inline bool triangleCandidate(const ShearedRay& r, float tMin, float tMax, uint3
                               uint32_t recordFlags, const TriangleId& id, const float (*v)[3], TriangleCandidate& out) {
     if (recordFlags & format::kTriangleDegenerate) return false;
     if (!intersectTriangle(r, v[0], v[1], v[2], out.hit)) return false;
-    return acceptTriangleHit(tMin, tMax, rayFlags, instanceFlags, recordFlags, id, out);
+    return acceptTriangleHit(r, tMin, tMax, rayFlags, instanceFlags, recordFlags, id, out);
 }
 
 // The same decision for lane `lane` of the four from `lane0` of a format-2 leaf that edgesOfFour left (its edge
@@ -181,7 +188,7 @@ inline bool leafLaneCandidate(const std::byte* blas, const format::ConstTriangle
                               uint32_t lane, const FourLaneEdges& e, const ShearedRay& r, float tMin, float tMax,
                               uint32_t rayFlags, uint32_t instanceFlags, TriangleCandidate& out) {
     return leafLaneHit(leaf, lane0, lane, e, r, out.hit) &&
-           acceptTriangleHit(tMin, tMax, rayFlags, instanceFlags, leaf.flags(lane0 + lane),
+           acceptTriangleHit(r, tMin, tMax, rayFlags, instanceFlags, leaf.flags(lane0 + lane),
                              leafTriangleId(blas, leaf, lane0 + lane), out);
 }
 
