@@ -44,8 +44,12 @@ void checkDeclaredCounts(const std::string& path, uint64_t fileSize) {
     if (first == "ply") {
         std::string line, format;
         uint64_t v = 0, f = 0, vertexProps = 0;
-        bool inVertex = false;
-        while (std::getline(in, line) && line.rfind("end_header", 0) != 0) {
+        bool inVertex = false, ended = false;
+        while (std::getline(in, line)) {
+            if (line.rfind("end_header", 0) == 0) {
+                ended = true;
+                break;
+            }
             std::istringstream words(line);
             std::string w, what;
             words >> w;
@@ -60,6 +64,8 @@ void checkDeclaredCounts(const std::string& path, uint64_t fileSize) {
                 ++vertexProps;
             }
         }
+        // assimp's PLY reader loops forever on a header cut short (assimp 5.2.5): refused here.
+        if (!ended) throw InputError(path, "truncated or malformed: its PLY header has no end_header line");
         const uint64_t perProp = format == "ascii" ? 2 : 1;
         if (v * std::max<uint64_t>(vertexProps, 3) * perProp + f * 4 * perProp > fileSize) refuse(path, v, f, fileSize);
     }

@@ -16,6 +16,7 @@
 #include <utility>
 #include <vector>
 
+#include "imported_scene_check.hpp"
 #include "input_error.hpp"
 #include "mesh_header_check.hpp"
 #include "structure_file.hpp"
@@ -138,18 +139,30 @@ ModelInfo loadModel(const std::string& path, Scene& scene) {
     importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
     const aiScene* s = nullptr;
     AssimpErrorLog errors;
-    try {
-        s = importer.ReadFile(path, aiProcess_Triangulate | aiProcess_JoinIdenticalVertices | aiProcess_SortByPType);
-    } catch (const std::bad_alloc&) {
-        throw InputError(path, "out of memory while reading it");
-    }
-    if (!s) {
+    auto failed = [&] {
         std::string why = importer.GetErrorString();
         if (why.find("bad_alloc") != std::string::npos) throw InputError(path, "out of memory while reading it");
         if (why.find("No meshes remaining") != std::string::npos)  // what assimp says once points and lines are gone
             throw InputError(path, "holds no triangles (only points or lines)");
         throw InputError(path, "not a mesh file assimp can read: " + (why.empty() ? std::string("unknown error") : why));
+    };
+    // Read with no post-processing step: the steps trust what the importer made, and a truncated or damaged file
+    // makes faces of garbage indices (SIGSEGV in Triangulate) or polygon claims without polygons (Triangulate's
+    // assertion aborts). checkImportedScene checks the scene first and makes the steps' preconditions true.
+    try {
+        s = importer.ReadFile(path, 0);
+    } catch (const std::bad_alloc&) {
+        throw InputError(path, "out of memory while reading it");
     }
+    if (!s) failed();
+    if (!errors.catcher.first.empty()) throw InputError(path, "malformed: " + errors.catcher.first);
+    checkImportedScene(path, importer);
+    try {
+        s = importer.ApplyPostProcessing(aiProcess_Triangulate | aiProcess_JoinIdenticalVertices | aiProcess_SortByPType);
+    } catch (const std::bad_alloc&) {
+        throw InputError(path, "out of memory while reading it");
+    }
+    if (!s) failed();
     if (!errors.catcher.first.empty()) throw InputError(path, "malformed: " + errors.catcher.first);
     if (!s->mRootNode || s->mNumMeshes == 0) throw InputError(path, "holds no meshes");
 
