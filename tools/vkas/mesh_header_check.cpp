@@ -65,7 +65,7 @@ void checkDeclaredCounts(const std::string& path, uint64_t fileSize) {
             }
         }
         // assimp's PLY reader loops forever on a header cut short (assimp 5.2.5): refused here.
-        if (!ended) throw InputError(path, "truncated or malformed: its PLY header has no end_header line");
+        if (!ended) throw InputError(path, "not a mesh file assimp can read: its PLY header has no end_header line (truncated?)");
         const uint64_t perProp = format == "ascii" ? 2 : 1;
         if (v * std::max<uint64_t>(vertexProps, 3) * perProp + f * 4 * perProp > fileSize) refuse(path, v, f, fileSize);
     }
