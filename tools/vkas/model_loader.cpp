@@ -6,10 +6,13 @@
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 #include <fcntl.h>
+#include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <cerrno>
+#include <chrono>
+#include <thread>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -132,7 +135,7 @@ Mesh convertMesh(const std::string& path, const aiMesh& am, unsigned index) {
 // assimp's importers themselves crash on some damaged files (inside Importer::ReadFile, before anything of vkas sees
 // the data: found by vkas_fuzz_mesh_file). So a child process reads the file first; when it dies, the file is
 // refused and this process never reads it. Reading is deterministic: a file the child read is read here the same way.
-void readInChild(const std::string& path) {
+void readInChild(const std::string& path, uint64_t fileSize) {
     std::fflush(nullptr);
     const pid_t pid = fork();
     if (pid < 0) return;  // no child: read in this process as before
@@ -146,9 +149,21 @@ void readInChild(const std::string& path) {
         }
         _exit(0);
     }
+    // Some importers also loop forever on a damaged file: the child gets 10 s, and 1 s more per MiB of file.
+    const auto limit = std::chrono::steady_clock::now() + std::chrono::seconds(10 + fileSize / 1048576);
     int status = 0;
-    while (waitpid(pid, &status, 0) < 0)
-        if (errno != EINTR) return;
+    for (;;) {
+        const pid_t done = waitpid(pid, &status, WNOHANG);
+        if (done == pid) break;
+        if (done < 0 && errno != EINTR) return;
+        if (std::chrono::steady_clock::now() > limit) {
+            kill(pid, SIGKILL);
+            waitpid(pid, &status, 0);
+            throw InputError(path, "damaged: assimp's importer did not finish reading it in " +
+                                       std::to_string(10 + fileSize / 1048576) + " s");
+        }
+        std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    }
     if (WIFSIGNALED(status))
         throw InputError(path, "damaged: assimp's importer crashed reading it (signal " + std::to_string(WTERMSIG(status)) + ")");
     if (WIFEXITED(status) && WEXITSTATUS(status) != 0)
@@ -165,7 +180,7 @@ ModelInfo loadModel(const std::string& path, Scene& scene) {
     checkDeclaredCounts(path, fileSize);
     checkMemory(8.0 * double(fileSize), "loading " + path);  // assimp holds the file and its own copy of the meshes
 
-    readInChild(path);
+    readInChild(path, fileSize);
     Assimp::Importer importer;
     importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
     const aiScene* s = nullptr;
