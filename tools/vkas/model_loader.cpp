@@ -247,6 +247,14 @@ ModelInfo loadModel(const std::string& path, Scene& scene) {
             if (mesh >= s->mNumMeshes || blasOf[mesh] < 0) continue;
             if (!finite(transform))
                 throw InputError(path, "node \"" + std::string(node->mName.C_Str()) + "\" has a non-finite transform");
+            // An instance transform must be invertible (VUID-VkTransformMatrixKHR-matrix-03799: vkas refuses the
+            // build otherwise); the same determinant in double precision.
+            const auto& m = transform.m;
+            const double det = double(m[0][0]) * (double(m[1][1]) * m[2][2] - double(m[1][2]) * m[2][1]) -
+                               double(m[0][1]) * (double(m[1][0]) * m[2][2] - double(m[1][2]) * m[2][0]) +
+                               double(m[0][2]) * (double(m[1][0]) * m[2][1] - double(m[1][1]) * m[2][0]);
+            if (!(det != 0.0 && std::isfinite(det)))
+                throw InputError(path, "node \"" + std::string(node->mName.C_Str()) + "\" has a transform that is not invertible");
             InstanceDesc inst;
             inst.blas = static_cast<uint32_t>(blasOf[mesh]);
             inst.transform = transform;
