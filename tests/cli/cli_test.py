@@ -5,7 +5,7 @@ Every case runs the tool on real files and checks what it printed or wrote again
 counts and bounds parsed from the OBJ, the size-query formula of docs/FORMAT.md, PNG sizes and pixels decoded with
 zlib, the heatmap's statistics recomputed from its per-pixel counts. Standard library only. Exit 0 pass, 1 fail,
 77 skip."""
-import argparse, json, os, shutil, struct, subprocess, sys, time, zlib
+import argparse, concurrent.futures, json, os, random, shutil, struct, subprocess, sys, time, zlib
 
 GLMARK = "/usr/share/glmark2/models"
 ASSIMP = "/usr/share/assimp/models"
@@ -398,6 +398,87 @@ def case_bad_blob_to_render():
 
 def case_bad_huge_image():
     bad(["render", "--width", 16384, "--height", 16384, "--spp", 1024, "-o", work("big.png")], "memory")
+
+
+def off_to_binary_ply(path):
+    """The OFF file's vertices and faces as a binary little-endian PLY (the form of the truncated-file report)."""
+    words = [l.split() for l in open(path) if l.strip() and not l.startswith("#")]
+    nv, nf = int(words[1][0]), int(words[1][1])
+    body = b"".join(struct.pack("<3f", *map(float, w[:3])) for w in words[2:2 + nv])
+    for w in words[2 + nv:2 + nv + nf]:
+        n = int(w[0])
+        body += struct.pack(f"<B{n}i", n, *map(int, w[1:1 + n]))
+    header = (f"ply\nformat binary_little_endian 1.0\nelement vertex {nv}\nproperty float x\nproperty float y\n"
+              f"property float z\nelement face {nf}\nproperty list uchar int vertex_indices\nend_header\n")
+    return header.encode() + body
+
+
+def damaged_sources():
+    """(format, extension, bytes) of one test mesh per format docs/CLI.md names."""
+    files = [("OBJ", f"{ASSIMP}/OBJ/spider.obj"), ("OBJ polygons", f"{ASSIMP}/OBJ/concave_polygon.obj"),
+             ("PLY ASCII", f"{ASSIMP}/PLY/cube_uv.ply"), ("STL ASCII", f"{ASSIMP}/STL/sphereWithHole.stl"),
+             ("STL binary", f"{ASSIMP}/STL/Spider_binary.stl"), ("OFF", f"{ASSIMP}/OFF/Wuson.off"),
+             ("glTF", f"{ASSIMP}/glTF2/BoxTextured-glTF-Embedded/BoxTextured.gltf"),
+             ("GLB", f"{ASSIMP}/glTF2/BoxTextured-glTF-Binary/BoxTextured.glb"), ("3DS", f"{GLMARK}/horse.3ds")]
+    out = [(fmt, os.path.splitext(f)[1].lower(), open(need(f), "rb").read()) for fmt, f in files]
+    out.append(("PLY binary", ".ply", off_to_binary_ply(need(f"{ASSIMP}/OFF/Wuson.off"))))
+    return out
+
+
+def case_bad_damaged_meshes():
+    # Each test mesh cut at 20%, 50%, 80% and at random points, and with random bytes flipped; render, inspect and
+    # heatmap on each must exit 0 or 1 (then one message naming the file), never die of a signal or hang.
+    seed = int(os.environ.get("VKAS_CLI_DAMAGE_SEED", "35"))
+    print(f"damage seed {seed} (VKAS_CLI_DAMAGE_SEED=N picks another set of cuts and flips)")
+    rng = random.Random(seed)
+    inputs = []
+    for fmt, ext, data in damaged_sources():
+        n = len(data)
+        cuts = sorted({n * k // 10 for k in (2, 5, 8)} | {rng.randrange(1, n) for _ in range(4)})
+        for c in cuts:
+            inputs.append((f"{fmt} cut at {c} of {n} bytes", ext, data[:c]))
+        for _ in range(5):
+            d = bytearray(data)
+            flips = sorted(rng.randrange(n) for _ in range(rng.randint(1, 8)))
+            for at in flips:
+                d[at] ^= rng.randrange(1, 256)
+            inputs.append((f"{fmt} with bytes {flips} flipped", ext, bytes(d)))
+    jobs = []
+    for i, (what, ext, data) in enumerate(inputs):
+        path = work(f"damaged{i}{ext}")
+        open(path, "wb").write(data)
+        png = work(f"damaged{i}.png")
+        jobs += [(what, path, ["render", path, "--width", 32, "--height", 24, "--spp", 1, "-o", png]),
+                 (what, path, ["inspect", path]),
+                 (what, path, ["heatmap", path, "--width", 32, "--height", 24, "-o", png])]
+
+    def one(job):
+        what, path, args = job
+        try:
+            p = subprocess.run([A.tool, *map(str, args)], stdout=subprocess.PIPE, stderr=subprocess.PIPE, timeout=30,
+                               text=True, errors="replace")
+        except subprocess.TimeoutExpired:
+            return f"{what}: `vkas {args[0]}` hung (killed after 30 s)", None
+        err = p.stderr.strip()
+        if p.returncode < 0:
+            return f"{what}: `vkas {args[0]}` died of signal {-p.returncode}: {err[-300:]}", None
+        if "Sanitizer" in err or "runtime error" in err:
+            return f"{what}: `vkas {args[0]}`: {err[-600:]}", None
+        if p.returncode == 1:
+            if len(err.splitlines()) != 1 or not err.startswith("vkas: error: ") or path not in err:
+                return f"{what}: `vkas {args[0]}` exit 1 without one message naming the file: {err[-300:]!r}", None
+        elif p.returncode != 0:
+            return f"{what}: `vkas {args[0]}` exit status {p.returncode}: {err[-300:]}", None
+        return None, p.returncode
+
+    t0, failures, status = time.time(), [], {0: 0, 1: 0}
+    with concurrent.futures.ThreadPoolExecutor(max_workers=2) as pool:
+        for failure, rc in pool.map(one, jobs):
+            if failure: failures.append(failure)
+            else: status[rc] += 1
+    print(f"{len(inputs)} damaged files, {len(jobs)} runs in {time.time() - t0:.1f} s: {status[0]} exit 0, "
+          f"{status[1]} exit 1 with a message, {len(failures)} failed")
+    expect(not failures, f"{len(failures)} of {len(jobs)} runs failed:\n" + "\n".join(failures[:30]))
 
 
 def main():

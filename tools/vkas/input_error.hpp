@@ -9,7 +9,15 @@ namespace vkas_tool {
 
 class InputError : public std::runtime_error {
 public:
-    InputError(const std::string& file, const std::string& problem) : std::runtime_error(file + ": " + problem) {}
+    // Control characters of `problem` (names and text a damaged file supplies) become spaces: one line.
+    InputError(const std::string& file, const std::string& problem) : std::runtime_error(file + ": " + oneLine(problem)) {}
+
+private:
+    static std::string oneLine(std::string s) {
+        for (char& c : s)
+            if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) c = ' ';
+        return s;
+    }
 };
 
 // Memory the machine has (physical), so that a request far larger fails with a message before it allocates.

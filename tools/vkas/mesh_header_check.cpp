@@ -37,6 +37,24 @@ void checkDeclaredCounts(const std::string& path, uint64_t fileSize) {
         }
         // A vertex takes at least "0 0 0\n" (6 bytes), a face "3 0 1 2\n" (8); binary OFF at least 12 and 16.
         if (6 * v + 8 * f > fileSize) refuse(path, v, f, fileSize);
+        if (first != "OFF") return;
+        // ASCII OFF: assimp 5.2.5's reader crashes (SIGSEGV inside the importer) on a face line that holds fewer
+        // indices than its count announces, so every face line is checked first: the count, then that many indices.
+        uint64_t seen = 0;
+        while (seen < v && std::getline(in, line))
+            if (line.find_first_not_of(" \t\r") != std::string::npos && line[line.find_first_not_of(" \t\r")] != '#') ++seen;
+        for (uint64_t face = 0; face < f && std::getline(in, line);) {
+            const size_t at = line.find_first_not_of(" \t\r");
+            if (at == std::string::npos || line[at] == '#') continue;
+            std::istringstream words(line);
+            uint64_t n = 0, index = 0;
+            if (!(words >> n)) return;  // assimp reports it
+            for (uint64_t k = 0; k < n; ++k)
+                if (!(words >> index))
+                    throw InputError(path, "truncated or malformed: OFF face " + std::to_string(face) + " announces " +
+                                               std::to_string(n) + " vertex indices and holds " + std::to_string(k));
+            ++face;
+        }
         return;
     }
     // PLY: "element vertex N" / "element face M" lines up to "end_header"; at least 1 byte per property in binary,
@@ -44,8 +62,12 @@ void checkDeclaredCounts(const std::string& path, uint64_t fileSize) {
     if (first == "ply") {
         std::string line, format;
         uint64_t v = 0, f = 0, vertexProps = 0;
-        bool inVertex = false;
-        while (std::getline(in, line) && line.rfind("end_header", 0) != 0) {
+        bool inVertex = false, ended = false;
+        while (std::getline(in, line)) {
+            if (line.rfind("end_header", 0) == 0) {
+                ended = true;
+                break;
+            }
             std::istringstream words(line);
             std::string w, what;
             words >> w;
@@ -60,6 +82,8 @@ void checkDeclaredCounts(const std::string& path, uint64_t fileSize) {
                 ++vertexProps;
             }
         }
+        // assimp's PLY reader loops forever on a header cut short (assimp 5.2.5): refused here.
+        if (!ended) throw InputError(path, "not a mesh file assimp can read: its PLY header has no end_header line (truncated?)");
         const uint64_t perProp = format == "ascii" ? 2 : 1;
         if (v * std::max<uint64_t>(vertexProps, 3) * perProp + f * 4 * perProp > fileSize) refuse(path, v, f, fileSize);
     }

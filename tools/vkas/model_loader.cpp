@@ -5,8 +5,14 @@
 #include <assimp/LogStream.hpp>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
+#include <fcntl.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <cerrno>
+#include <chrono>
+#include <thread>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -16,6 +22,7 @@
 #include <utility>
 #include <vector>
 
+#include "imported_scene_check.hpp"
 #include "input_error.hpp"
 #include "mesh_header_check.hpp"
 #include "structure_file.hpp"
@@ -125,6 +132,45 @@ Mesh convertMesh(const std::string& path, const aiMesh& am, unsigned index) {
     return m;
 }
 
+// assimp's importers themselves crash on some damaged files (inside Importer::ReadFile, before anything of vkas sees
+// the data: found by vkas_fuzz_mesh_file). So a child process reads the file first; when it dies, the file is
+// refused and this process never reads it. Reading is deterministic: a file the child read is read here the same way.
+void readInChild(const std::string& path, uint64_t fileSize) {
+    std::fflush(nullptr);
+    const pid_t pid = fork();
+    if (pid < 0) return;  // no child: read in this process as before
+    if (pid == 0) {
+        const int null = open("/dev/null", O_WRONLY);  // what glibc or a sanitizer prints as it dies: not ours
+        if (null >= 0) dup2(null, 1), dup2(null, 2);
+        try {
+            Assimp::Importer importer;
+            importer.ReadFile(path, 0);
+        } catch (...) {
+        }
+        _exit(0);
+    }
+    // Some importers also loop forever on a damaged file: the child gets 10 s, and 1 s more per MiB of file.
+    const auto limit = std::chrono::steady_clock::now() + std::chrono::seconds(10 + fileSize / 1048576);
+    int status = 0;
+    for (;;) {
+        const pid_t done = waitpid(pid, &status, WNOHANG);
+        if (done == pid) break;
+        if (done < 0 && errno != EINTR) return;
+        if (std::chrono::steady_clock::now() > limit) {
+            kill(pid, SIGKILL);
+            waitpid(pid, &status, 0);
+            throw InputError(path, "damaged: assimp's importer did not finish reading it in " +
+                                       std::to_string(10 + fileSize / 1048576) + " s");
+        }
+        std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    }
+    if (WIFSIGNALED(status))
+        throw InputError(path, "damaged: assimp's importer crashed reading it (signal " + std::to_string(WTERMSIG(status)) + ")");
+    if (WIFEXITED(status) && WEXITSTATUS(status) != 0)
+        throw InputError(path, "damaged: assimp's importer failed reading it (exit status " +
+                                   std::to_string(WEXITSTATUS(status)) + ")");
+}
+
 }  // namespace
 
 ModelInfo loadModel(const std::string& path, Scene& scene) {
@@ -134,22 +180,35 @@ ModelInfo loadModel(const std::string& path, Scene& scene) {
     checkDeclaredCounts(path, fileSize);
     checkMemory(8.0 * double(fileSize), "loading " + path);  // assimp holds the file and its own copy of the meshes
 
+    readInChild(path, fileSize);
     Assimp::Importer importer;
     importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
     const aiScene* s = nullptr;
     AssimpErrorLog errors;
-    try {
-        s = importer.ReadFile(path, aiProcess_Triangulate | aiProcess_JoinIdenticalVertices | aiProcess_SortByPType);
-    } catch (const std::bad_alloc&) {
-        throw InputError(path, "out of memory while reading it");
-    }
-    if (!s) {
+    auto failed = [&] {
         std::string why = importer.GetErrorString();
         if (why.find("bad_alloc") != std::string::npos) throw InputError(path, "out of memory while reading it");
         if (why.find("No meshes remaining") != std::string::npos)  // what assimp says once points and lines are gone
             throw InputError(path, "holds no triangles (only points or lines)");
         throw InputError(path, "not a mesh file assimp can read: " + (why.empty() ? std::string("unknown error") : why));
+    };
+    // Read with no post-processing step: the steps trust what the importer made, and a truncated or damaged file
+    // makes faces of garbage indices (SIGSEGV in Triangulate) or polygon claims without polygons (Triangulate's
+    // assertion aborts). checkImportedScene checks the scene first and makes the steps' preconditions true.
+    try {
+        s = importer.ReadFile(path, 0);
+    } catch (const std::bad_alloc&) {
+        throw InputError(path, "out of memory while reading it");
     }
+    if (!s) failed();
+    if (!errors.catcher.first.empty()) throw InputError(path, "malformed: " + errors.catcher.first);
+    checkImportedScene(path, importer);
+    try {
+        s = importer.ApplyPostProcessing(aiProcess_Triangulate | aiProcess_JoinIdenticalVertices | aiProcess_SortByPType);
+    } catch (const std::bad_alloc&) {
+        throw InputError(path, "out of memory while reading it");
+    }
+    if (!s) failed();
     if (!errors.catcher.first.empty()) throw InputError(path, "malformed: " + errors.catcher.first);
     if (!s->mRootNode || s->mNumMeshes == 0) throw InputError(path, "holds no meshes");
 
@@ -188,6 +247,14 @@ ModelInfo loadModel(const std::string& path, Scene& scene) {
             if (mesh >= s->mNumMeshes || blasOf[mesh] < 0) continue;
             if (!finite(transform))
                 throw InputError(path, "node \"" + std::string(node->mName.C_Str()) + "\" has a non-finite transform");
+            // An instance transform must be invertible (VUID-VkTransformMatrixKHR-matrix-03799: vkas refuses the
+            // build otherwise); the same determinant in double precision.
+            const auto& m = transform.m;
+            const double det = double(m[0][0]) * (double(m[1][1]) * m[2][2] - double(m[1][2]) * m[2][1]) -
+                               double(m[0][1]) * (double(m[1][0]) * m[2][2] - double(m[1][2]) * m[2][0]) +
+                               double(m[0][2]) * (double(m[1][0]) * m[2][1] - double(m[1][1]) * m[2][0]);
+            if (!(det != 0.0 && std::isfinite(det)))
+                throw InputError(path, "node \"" + std::string(node->mName.C_Str()) + "\" has a transform that is not invertible");
             InstanceDesc inst;
             inst.blas = static_cast<uint32_t>(blasOf[mesh]);
             inst.transform = transform;
