@@ -70,7 +70,8 @@ def _traceable(o, d):
 
 
 def _mesh_arrays(mesh):
-    """mesh.vertices as (n, 3) float32 and mesh.faces as (m, 3) int64, as vkas traces them.
+    """mesh.vertices as (n, 3) float32 and mesh.faces as (m, 3) integers, as vkas traces them, and the vertices as
+    (n, 3) float64 (for the locations).
 
     (n, 2) vertices lie in the plane z = 0 (trimesh's convention, util.stack_3D). A vertex with a coordinate that is
     not finite (or not finite in float32) makes the triangles that use it inactive: they are never hit, as Embree
@@ -78,7 +79,7 @@ def _mesh_arrays(mesh):
     vertices = np.asarray(mesh.vertices, dtype=np.float64)
     faces = np.asarray(mesh.faces)
     if faces.size == 0:
-        return None, None
+        return None, None, None
     if vertices.ndim != 2 or vertices.shape[1] not in (2, 3):
         raise ValueError(f"mesh.vertices: expected an (n, 3) or (n, 2) array, got shape {vertices.shape}")
     if faces.ndim == 1 and faces.size % 3 == 0:
@@ -93,7 +94,7 @@ def _mesh_arrays(mesh):
     if bad.any():
         v32[bad] = 0
         v32[bad, 0] = np.nan
-    return v32, faces
+    return v32, faces, vertices
 
 
 class RayMeshIntersector:
@@ -118,7 +119,7 @@ class RayMeshIntersector:
         self.scale_to_box = scale_to_box
         self.kwargs = kwargs
         self._lock = threading.Lock()
-        self._built = None  # (key, scene or None for a mesh without triangles, float64 vertices, faces)
+        self._built = None  # (key, scene or None for a mesh without triangles, float32 vertices, faces, float64 ones)
 
     @property
     def device(self):
@@ -143,24 +144,28 @@ class RayMeshIntersector:
 
     def _scene(self):
         """The vkas.Scene of the mesh as it is now (None for a mesh without triangles), built or rebuilt here."""
+        return self._state()[1]
+
+    def _state(self):
+        """(key, scene, float32 vertices, faces, float64 vertices) of the mesh as it is now, built or rebuilt here."""
         with self._lock:
             key = self._key()
             built = self._built
             if key is not None:
                 if built is not None and built[0] == key:
-                    return built[1]
-                v, f = _mesh_arrays(self.mesh)
+                    return built
+                v, f, v64 = _mesh_arrays(self.mesh)
             else:
-                v, f = _mesh_arrays(self.mesh)
+                v, f, v64 = _mesh_arrays(self.mesh)
                 if built is not None and built[0] is None and _same(v, built[2]) and _same(f, built[3]):
-                    return built[1]
+                    return built
             self._built = None
             scene = None if v is None else Scene(self.device, v, f)
             if key is None and v is not None:
                 # keep what it was built from, to compare at the next query (the mesh's arrays may change in place)
-                v, f = v.copy(), np.array(f, copy=True)
-            self._built = (key, scene, v if key is None else None, f if key is None else None)
-            return scene
+                v, f, v64 = v.copy(), np.array(f, copy=True), v64.copy()
+            self._built = (key, scene, v, f, v64)
+            return self._built
 
     # -- queries ---------------------------------------------------------------------------------------------------
 
@@ -172,7 +177,8 @@ class RayMeshIntersector:
         closest), else only the first (closest) one.
         """
         o, d = _as_rays(ray_origins, ray_directions)
-        scene = self._scene()
+        state = self._state()
+        scene = state[1]
         ok = _traceable(o, d)
         if scene is None or not ok.any():
             empty = np.zeros(0, dtype=np.int64)
@@ -190,8 +196,7 @@ class RayMeshIntersector:
             index_tri = hits.primitive_id[hit].astype(np.int64)
             t = hits.t[hit]
         if return_locations:
-            locations = o[index_ray] + d[index_ray] * t.astype(np.float64)[:, None]
-            return index_tri, index_ray, locations
+            return index_tri, index_ray, _locations(state, o[index_ray], d[index_ray], index_tri, t)
         return index_tri, index_ray
 
     def intersects_location(self, ray_origins, ray_directions, multiple_hits=True):
@@ -252,6 +257,22 @@ class RayMeshIntersector:
 
     def __deepcopy__(self, memo):
         return self.__copy__()
+
+
+def _locations(state, o, d, index_tri, t):
+    """origin + t * direction in float64, t the distance to the hit triangle's plane computed in float64 from
+    the mesh's own vertices (as trimesh's intersectors do), or vkas's float32 t where the ray is within about
+    1e-6 rad of the plane (or the plane's normal is not finite)."""
+    t = t.astype(np.float64)
+    _, _, _, faces, v64 = state
+    tri = v64[faces[index_tri]]
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+        n = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+        dn = np.einsum("ij,ij->i", d, n)
+        plane = np.einsum("ij,ij->i", tri[:, 0] - o, n) / dn
+        good = (np.abs(dn) > 1e-6 * np.linalg.norm(d, axis=1) * np.linalg.norm(n, axis=1)) & np.isfinite(plane)
+    t[good] = plane[good]
+    return o + d * t[:, None]
 
 
 def _same(a, b):
