@@ -4,12 +4,21 @@
 # python3-scikit-build-core, which bookworm has only in bookworm-backports (with the python3-packaging >= 25 it
 # needs from there too). The backports apt source is derived from the machine's own Debian source, as
 # scripts/setup-lavapipe.sh does (it adds the same file; either script may run first).
+# With VKAS_TRIMESH_SRC set, also the Debian packages trimesh's tests need (below).
 set -euo pipefail
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 
 say() { echo "setup-python: $*" >&2; }
 
-"$root/scripts/setup-deps.sh" pybind11-dev python3-numpy python3-pytest python3-venv python3-pip
+# With VKAS_TRIMESH_SRC set (a trimesh checkout: python/tests/test_trimesh_suite.py runs trimesh's own tests with
+# vkas's intersector), also what trimesh's tests need of Debian: scipy, networkx, rtree (trimesh's own intersector,
+# which the suite compares with), shapely, PIL (the textured models of test_mesh.py).
+trimesh_test_packages=()
+if [[ -n ${VKAS_TRIMESH_SRC:-} ]]; then
+  trimesh_test_packages=(python3-scipy python3-networkx python3-rtree python3-shapely python3-pil)
+fi
+"$root/scripts/setup-deps.sh" pybind11-dev python3-numpy python3-pytest python3-venv python3-pip \
+  "${trimesh_test_packages[@]}"
 
 installed() { [[ $(dpkg-query -W -f='${db:Status-Status}' "$1" 2>/dev/null || true) == installed ]]; }
 if installed python3-scikit-build-core; then
