@@ -296,6 +296,8 @@ const T* arrayData(const py::array& a, const char* name, std::initializer_list<p
     if (!py::isinstance<py::array_t<T>>(a) || !a.dtype().is(py::dtype::of<T>()))
         throw py::type_error(std::string(name) + ": wrong dtype for vkas._core");
     if (!(a.flags() & py::array::c_style)) throw py::value_error(std::string(name) + ": not C-contiguous");
+    if (reinterpret_cast<uintptr_t>(a.data()) % alignof(T) != 0)
+        throw py::value_error(std::string(name) + ": not aligned to " + std::to_string(alignof(T)) + " bytes");
     if (size_t(a.ndim()) != shape.size()) throw py::value_error(std::string(name) + ": wrong number of dimensions");
     size_t k = 0;
     for (py::ssize_t s : shape) {
@@ -718,6 +720,13 @@ public:
     // (its device address; null for 0, an inactive instance); without, the blob must have no entries.
     StructurePtr deserialize(const py::buffer& blob, const std::vector<StructurePtr>& bottoms, bool replace) {
         py::buffer_info b = blob.request();
+        // The bytes are read as one run from b.ptr: a strided view (a reversed memoryview) would be read outside it.
+        py::ssize_t expected = b.itemsize;
+        for (py::ssize_t k = b.ndim - 1; k >= 0; --k) {
+            if (b.shape[size_t(k)] > 1 && b.strides[size_t(k)] != expected)
+                throw py::value_error("blob: not C-contiguous: pass bytes(blob)");
+            expected *= b.shape[size_t(k)];
+        }
         const uint64_t n = uint64_t(b.size) * uint64_t(b.itemsize);
         if (n < 64) throw py::value_error("blob: " + std::to_string(n) + " bytes is too short for a serialized structure");
         auto load = [&](size_t off) {

@@ -106,14 +106,19 @@ def _float32(value, name, desc, shape_ok):
     """value as a C-contiguous float32 array; desc like '(R, 3)' for the messages; shape_ok(shape) -> bool."""
     try:
         a = np.asarray(value)
-    except Exception as e:  # pragma: no cover - numpy raises for exotic objects
-        raise TypeError(f"{name}: expected {_an(desc)} float32 array, got {type(value).__name__}") from e
+    except Exception as e:  # numpy raises for ragged lists and exotic objects
+        raise TypeError(f"{name}: expected {_an(desc)} float32 array, got {type(value).__name__} that numpy cannot "
+                        f"read as an array ({e})") from e
     if a.dtype == np.float32:
         if not shape_ok(a.shape):
             raise ValueError(f"{name}: expected {_an(desc)} float32 array, got shape {_shape_text(a.shape)}")
         if not a.flags.c_contiguous:
             raise ValueError(f"{name}: the float32 array is not C-contiguous; vkas reads float32 arrays in place "
                              f"and does not copy them behind your back: pass np.ascontiguousarray({name})")
+        if not a.flags.aligned:
+            raise ValueError(f"{name}: the float32 array is not aligned to 4 bytes; vkas reads float32 arrays in "
+                             f"place and does not copy them behind your back: pass np.require({name}, "
+                             f"requirements='CA')")
         return a
     if a.dtype == np.float64:
         if not shape_ok(a.shape):
@@ -187,6 +192,9 @@ def _indices(value, nvertices):
         if not a.flags.c_contiguous:
             raise ValueError("indices: the array is not C-contiguous; vkas reads uint16/uint32 indices in place: "
                              "pass np.ascontiguousarray(indices)")
+        if not a.flags.aligned:
+            raise ValueError(f"indices: the {a.dtype} array is not aligned to {a.dtype.itemsize} bytes; vkas reads "
+                             "uint16/uint32 indices in place: pass np.require(indices, requirements='CA')")
         return a
     return np.ascontiguousarray(a, dtype=np.uint32)  # int32, int64, ...: range checked above
 
@@ -255,7 +263,7 @@ class Spheres:
     def __init__(self, centers, radii, opaque=True):
         c = _float32(centers, "centers", "(N, 3)", _rows3)
         _check_finite(c, "centers")
-        if np.ndim(radii) == 0 and isinstance(radii, numbers.Real) and not isinstance(radii, (bool, np.bool_)):
+        if _ndim(radii, "radii", "a number or an (N,) float32 array") == 0 and isinstance(radii, numbers.Real) and not isinstance(radii, (bool, np.bool_)):
             r = np.full(len(c), radii, dtype=np.float32)
         else:
             r = _float32(radii, "radii", f"(N,) (N = {len(c)})", lambda s: s == (len(c),))
@@ -362,7 +370,10 @@ class Device:
         if isinstance(blob, np.ndarray):
             if blob.dtype != np.uint8 or not blob.flags.c_contiguous:
                 raise TypeError("blob: expected bytes (or a C-contiguous uint8 array)")
-        elif not isinstance(blob, (bytes, bytearray, memoryview)):
+        elif isinstance(blob, memoryview):
+            if not blob.c_contiguous:
+                raise ValueError("blob: the memoryview is not C-contiguous: pass bytes(blob)")
+        elif not isinstance(blob, (bytes, bytearray)):
             raise TypeError(f"blob: expected bytes, got {type(blob).__name__}")
         if bottom_levels is None:
             bottoms, replace = [], False
@@ -756,8 +767,17 @@ def _load_top(device, blob, instances):
     return device.deserialize(blob, [None if i is None else i.bottom_level for i in instances])
 
 
+def _ndim(value, name, desc):
+    """np.ndim(value), or TypeError naming the argument where numpy cannot make an array of it (ragged lists)."""
+    try:
+        return np.ndim(value)
+    except Exception as e:
+        raise TypeError(f"{name}: expected {desc}, got {type(value).__name__} that numpy cannot read as an array "
+                        f"({e})") from e
+
+
 def _t(value, name, count):
-    if np.ndim(value) == 0:
+    if _ndim(value, name, "a number or an (R,) float32 array") == 0:
         if isinstance(value, (bool, np.bool_)) or not isinstance(value, (numbers.Real, np.ndarray)):
             raise TypeError(f"{name}: expected a number or an (R,) float32 array, got {type(value).__name__}")
         if isinstance(value, np.ndarray) and not np.issubdtype(value.dtype, np.floating) \
