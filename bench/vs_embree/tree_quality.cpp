@@ -2,9 +2,11 @@
 // Embree: for comparing builders (PREFER_FAST_TRACE against the default build, say) where timings are noisy. Prints
 // each build's time, compacted bytes per triangle, SAH cost and the one-thread rates of camera, diffuse and shadow
 // rays. Under `valgrind --tool=callgrind --toggle-collect='vb::measuredTrace*'` (one --kind) the instruction count
-// of the trace alone is repeatable to the instruction, whatever else the machine runs.
+// of the trace alone is repeatable to the instruction, whatever else the machine runs. --engine embree traces the
+// same rays with rtcIntersect1 / rtcOccluded1 (ROBUST scene, one thread) inside vb::measuredEmbree instead: with
+// --validation (the default vkas device) this is what bench/vs_embree/count-instructions.sh compares (issue 36).
 //   vkas_bench_tree_quality --scene torcs-forza [--flags default fast-trace fast-build] [--rays N] [--kind diffuse]
-//                           [--ray-query] [--denormals-are-zero]
+//                           [--ray-query] [--denormals-are-zero] [--validation] [--engine vkas|embree]
 #include <CLI/CLI.hpp>
 
 #include <xmmintrin.h>
@@ -12,6 +14,7 @@
 #include <cstdio>
 #include <map>
 
+#include "embree_side.hpp"
 #include "rays.hpp"
 #include "scenes.hpp"
 #include "vkas_side.hpp"
@@ -22,6 +25,11 @@ namespace vb {
 __attribute__((noinline)) double measuredTrace(VkasEngine& engine, VkAccelerationStructureKHR tlas, bool anyHit,
                                                const std::vector<VkasRay>& rays, std::vector<Hit>& hits, int reps) {
     return engine.traceBatch(tlas, anyHit, rays, hits, reps);
+}
+
+__attribute__((noinline)) double measuredEmbree(EmbreeEngine& embree, bool anyHit, bool coherent,
+                                                const std::vector<VkasRay>& rays, std::vector<Hit>& hits, int reps) {
+    return embree.trace(EmbreeCall::One, anyHit, coherent, rays, hits, 1, reps);
 }
 
 __attribute__((noinline)) double measuredQuery(VkasEngine& engine, VkAccelerationStructureKHR tlas, bool anyHit,
@@ -39,7 +47,8 @@ int main(int argc, char** argv) {
     std::vector<std::string> kinds{"camera", "diffuse", "shadow"};
     size_t rayCount = size_t(1) << 18;
     int reps = 3;
-    bool denormalsAreZero = false, rayQuery = false;
+    bool denormalsAreZero = false, rayQuery = false, validation = false;
+    std::string engineName = "vkas";
     app.add_option("--scene", sceneName, "a named scene of vkas_bench_embree (--list there)");
     app.add_option("--flags", flagNames, "build preferences: default, fast-trace, fast-build");
     app.add_option("--kind", kinds, "ray kinds: camera, diffuse, shadow");
@@ -49,6 +58,9 @@ int main(int argc, char** argv) {
                  "set MXCSR's flush-to-zero and denormals-are-zero bits on this thread first (a diagnostic: does a "
                  "tree's speed hang on denormal operands? with --ray-query, the traversal runs on this thread)");
     app.add_flag("--ray-query", rayQuery, "trace with vkasRayQuery* on this thread instead of vkasTraceRays");
+    app.add_flag("--validation", validation, "vkas: the default device (validation on), as users get it");
+    app.add_option("--engine", engineName, "vkas, or embree: rtcIntersect1 / rtcOccluded1 on the same rays (ROBUST "
+                   "scene of Embree's default quality; --flags and --ray-query do not apply)");
     app.add_option("--data-dir", dataDir, "where scripts/setup-bench.sh extracted the CGAL meshes");
     CLI11_PARSE(app, argc, argv);
     if (dataDir.empty()) dataDir = std::string(getenv("HOME") ? getenv("HOME") : "/tmp") + "/.cache/vkas-bench";
@@ -60,7 +72,8 @@ int main(int argc, char** argv) {
         const Scene scene = makeScene(sceneName, false, dataDir, 0);
         if (scene.manyInstances()) throw std::runtime_error("a mesh scene, please");
         if (denormalsAreZero) _mm_setcsr(_mm_getcsr() | 0x8040);  // FTZ (bit 15) and DAZ (bit 6)
-        VkasEngine engine(1);
+        if (engineName != "vkas" && engineName != "embree") throw std::runtime_error("unknown --engine " + engineName);
+        VkasEngine engine(1, validation);
         // The rays, the same for every build: diffuse and shadow rays start at the default build's camera hits.
         const std::vector<VkasRay> camera = cameraRays(scene, rayCount);
         std::vector<Hit> cameraHits;
@@ -75,6 +88,19 @@ int main(int argc, char** argv) {
         rays["shadow"] = secondaryRays(scene, RayKind::Shadow, camera, cameraHits, rayCount);
         std::printf("scene %s: %zu triangles, %zu rays of each kind, one thread\n", scene.name.c_str(),
                     scene.mesh.triangleCount(), rayCount);
+        if (engineName == "embree") {
+            EmbreeEngine embree(1);
+            embree.makeTraceScene(scene);
+            std::printf("  %-12s", "embree");
+            for (const std::string& k : kinds) {
+                if (!rays.count(k)) throw std::runtime_error("unknown --kind " + k);
+                std::vector<Hit> hits;
+                const double ms = measuredEmbree(embree, k == "shadow", k == "camera", rays[k], hits, reps);
+                std::printf(" %s %.3f Mr/s", k.c_str(), double(rays[k].size()) / ms / 1000.0);
+            }
+            std::printf("\n");
+            return 0;
+        }
         std::printf("  %-12s %9s %8s %7s", "build", "ms", "B/tri", "SAH");
         for (const std::string& k : kinds) std::printf(" %9s", (k + " Mr/s").c_str());
         std::printf("\n");

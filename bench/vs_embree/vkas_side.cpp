@@ -63,9 +63,9 @@ VkAccelerationStructureGeometryKHR instances(const std::vector<VkAccelerationStr
 
 }  // namespace
 
-VkasEngine::VkasEngine(uint32_t workerThreadCount) {
+VkasEngine::VkasEngine(uint32_t workerThreadCount, bool validation) {
     VkasDeviceCreateInfo ci{};
-    ci.disableValidation = VK_TRUE;
+    ci.disableValidation = validation ? VK_FALSE : VK_TRUE;
     ci.workerThreadCount = workerThreadCount;
     check(vkasCreateDevice(&ci, &dev_), "vkasCreateDevice");
 #define VB_LOAD(name) name = reinterpret_cast<PFN_##name>(vkasGetDeviceProcAddr(dev_, #name));

@@ -31,7 +31,9 @@ public:
         uint64_t scratchSize = 0;    // the same query's buildScratchSize (what the build was given)
     };
 
-    explicit VkasEngine(uint32_t workerThreadCount);  // 0: all cores (vkasTraceRays' worker threads)
+    // workerThreadCount 0: all cores (vkasTraceRays' worker threads). validation: the device as users get it by
+    // default (every ray checked); the benchmarks measure without it unless asked.
+    explicit VkasEngine(uint32_t workerThreadCount, bool validation = false);
     ~VkasEngine();
     VkasEngine(const VkasEngine&) = delete;
     VkasEngine& operator=(const VkasEngine&) = delete;

@@ -3,6 +3,8 @@
 // facing), ties between coincident triangles included, for every ray flag, instance flag, mask and build flag, and
 // for closest-hit and any-hit (TerminateOnFirstHit) mode. CTest runs this group twice: with the CPU's best kernel
 // and with VKAS_TRACE_KERNEL=sse2 (the baseline), so both instruction sets are held to the query.
+#include <limits>
+
 #include "meshes.hpp"
 
 using namespace vt;
@@ -193,3 +195,41 @@ std::string batchParamName(const ::testing::TestParamInfo<BatchParam>& info) {
 }
 
 INSTANTIATE_TEST_SUITE_P(cpu, batch_trace, ::testing::ValuesIn(kBatchParams), batchParamName);
+
+// A batch's ray rules (api/validate/ray.hpp): a valid ray is checked without a message being built (issue 36), an
+// invalid one is reported with its index, each broken rule once, at most 8 messages a call, and nothing is traced.
+class batch_trace_rules : public VkasTest {};
+
+TEST_F(batch_trace_rules, each_broken_ray_is_named_by_its_index) {
+    Mesh m = triangleSoup(50, rng, 0.2f);
+    auto g = makeGeometry(m, VK_INDEX_TYPE_UINT32, VK_GEOMETRY_OPAQUE_BIT_KHR);
+    AccelStruct* tlas = buildSingleInstanceTlas(buildBlas(*g));
+    std::vector<VkasRay> rays(1000);
+    for (VkasRay& r : rays) r = VkasRay{{0, 0, -5}, 0.0f, {0, 0, 1}, 100.0f};
+    const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
+    rays[3].origin[1] = nan;     // 06348
+    rays[17].direction[2] = inf;  // 06348
+    rays[400].tMin = nan;         // 06351
+    rays[401].tMax = -1.0f;       // 06349 (and 06350: tMin 0 > tMax -1)
+    rays[999].tMin = 200.0f;      // 06350
+    std::vector<VkasHit> hits(rays.size());
+    EXPECT_EQ(vkasTraceRays(device, tlas->handle, VKAS_TRACE_MODE_CLOSEST_HIT, 0, 0xFF, uint32_t(rays.size()),
+                            rays.data(), hits.data()),
+              VK_ERROR_VALIDATION_FAILED_EXT);
+    const std::vector<std::string> errors = takeValidationErrors();
+    const std::vector<std::pair<const char*, const char*>> expected = {
+        {"pRays[3]: the ray origin", "06348"},     {"pRays[17]: the ray direction", "06348"},
+        {"pRays[400]: RayTmin nan", "06351"},      {"pRays[401]: RayTmin 0 and RayTmax -1", "06349"},
+        {"pRays[401]: RayTmin 0 is greater", "06350"}, {"pRays[999]: RayTmin 200 is greater", "06350"}};
+    ASSERT_EQ(errors.size(), expected.size());
+    for (size_t i = 0; i < expected.size(); ++i) {
+        EXPECT_NE(errors[i].find(expected[i].first), std::string::npos) << errors[i];
+        EXPECT_NE(errors[i].find(expected[i].second), std::string::npos) << errors[i];
+    }
+    // Many broken rays: at most 8 messages.
+    for (VkasRay& r : rays) r.tMin = -1.0f;
+    EXPECT_EQ(vkasTraceRays(device, tlas->handle, VKAS_TRACE_MODE_ANY_HIT, 0, 0xFF, uint32_t(rays.size()),
+                            rays.data(), hits.data()),
+              VK_ERROR_VALIDATION_FAILED_EXT);
+    EXPECT_EQ(takeValidationErrors().size(), 8u);
+}

@@ -1,7 +1,5 @@
 #include "api/validate/ray.hpp"
 
-#include <cmath>
-
 #include "engine/format/layout.hpp"
 #include "vkas/vkas.h"
 
@@ -22,16 +20,16 @@ bool atMostOneBit(uint32_t v) { return (v & (v - 1)) == 0; }
 bool validateRay(Validator& v, const AccelerationStructure* tlas, uint32_t rayFlags, const float origin[3],
                  float tMin, const float direction[3], float tMax, const char* where) {
     bool ok = true;
-    auto finite3 = [](const float* p) { return std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]); };
-    ok &= v.check(finite3(origin), "VUID-RuntimeSpirv-OpRayQueryInitializeKHR-06348",
+    const RayValueRules rules = rayValueRules(origin, tMin, direction, tMax);
+    ok &= v.check(rules.originFinite, "VUID-RuntimeSpirv-OpRayQueryInitializeKHR-06348",
                   "%sthe ray origin (%g, %g, %g) is not finite.", where, origin[0], origin[1], origin[2]);
-    ok &= v.check(finite3(direction), "VUID-RuntimeSpirv-OpRayQueryInitializeKHR-06348",
+    ok &= v.check(rules.directionFinite, "VUID-RuntimeSpirv-OpRayQueryInitializeKHR-06348",
                   "%sthe ray direction (%g, %g, %g) is not finite.", where, direction[0], direction[1], direction[2]);
-    ok &= v.check(!std::isnan(tMin) && !std::isnan(tMax), "VUID-RuntimeSpirv-OpRayQueryInitializeKHR-06351",
+    ok &= v.check(rules.notNaN, "VUID-RuntimeSpirv-OpRayQueryInitializeKHR-06351",
                   "%sRayTmin %g or RayTmax %g is NaN.", where, tMin, tMax);
-    ok &= v.check(!(tMin < 0.0f) && !(tMax < 0.0f), "VUID-RuntimeSpirv-OpRayQueryInitializeKHR-06349",
+    ok &= v.check(rules.nonNegative, "VUID-RuntimeSpirv-OpRayQueryInitializeKHR-06349",
                   "%sRayTmin %g and RayTmax %g must be non-negative.", where, tMin, tMax);
-    ok &= v.check(!(tMin > tMax), "VUID-RuntimeSpirv-OpRayQueryInitializeKHR-06350",
+    ok &= v.check(rules.ordered, "VUID-RuntimeSpirv-OpRayQueryInitializeKHR-06350",
                   "%sRayTmin %g is greater than RayTmax %g.", where, tMin, tMax);
     ok &= v.check(atMostOneBit(rayFlags & kOpaqueGroup), "VUID-RuntimeSpirv-OpRayQueryInitializeKHR-06891",
                   "%sRayFlags 0x%x has more than one of Opaque, NoOpaque, CullOpaque and CullNoOpaque.", where,
