@@ -166,6 +166,7 @@ VkResult traceBatch(VkDevice device, VkAccelerationStructureKHR topLevel, VkasTr
         }
         uint32_t order[kRaysPerTask], groupSize[kRaysPerTask];
         const uint32_t groups = vkas::gatherPackets(rays, n, packets, originTolerance, order, groupSize);
+        if (choice == vkas::PacketChooser::Choice::Sample) chooser.recordGather(n - groups);  // > 0: a packet formed
         bool packetsPay = true;  // until a packet gives up: then this task's other rays go alone
         for (uint32_t g = 0, k = 0; g < groups; k += groupSize[g++]) {
             const bool coherent = groupSize[g] > 1 && packetsPay;

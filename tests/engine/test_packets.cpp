@@ -350,4 +350,28 @@ TEST(packet_gather, coherent_runs_of_one_octant_become_packets) {
     EXPECT_EQ(off, rays.size());
 }
 
+// The call-level chooser (packet_gather.hpp): a call whose first gathers form no packet stops gathering (its other
+// tasks go alone), unless one of them formed a packet; fixed policies never change.
+TEST(packet_chooser, stops_gathering_for_a_call_whose_first_gathers_form_no_packet) {
+    using vkas::PacketChooser, vkas::PacketPolicy;
+    PacketChooser incoherent(PacketPolicy::Coherent);
+    for (int task = 0; task < 3; ++task) {
+        EXPECT_EQ(incoherent.choice(), PacketChooser::Choice::Sample);
+        incoherent.recordGather(0);
+    }
+    EXPECT_EQ(incoherent.choice(), PacketChooser::Choice::Sample);
+    incoherent.recordGather(0);
+    EXPECT_EQ(incoherent.choice(), PacketChooser::Choice::Alone);
+
+    PacketChooser mixed(PacketPolicy::Coherent);
+    mixed.recordGather(0);
+    mixed.recordGather(5);  // a packet: the call keeps sampling
+    for (int task = 0; task < 10; ++task) mixed.recordGather(0);
+    EXPECT_EQ(mixed.choice(), PacketChooser::Choice::Sample);
+
+    PacketChooser always(PacketPolicy::Always);
+    for (int task = 0; task < 10; ++task) always.recordGather(0);
+    EXPECT_EQ(always.choice(), PacketChooser::Choice::Packets);
+}
+
 }  // namespace

@@ -52,6 +52,19 @@ class PacketChooser {
     }
     // While sampling: whether the next coherent group goes as a packet (then alone, then as a packet ...).
     bool nextSampleIsPacket() { return turn_.fetch_add(1, std::memory_order_relaxed) % 2 == 0; }
+    // While sampling: a task's gather formed `packets` packets. A call whose first kIncoherentTasks gathers formed
+    // none (diffuse bounces, shadow rays to scattered points) stops gathering: its other tasks trace alone at once,
+    // paying nothing for packets (issue 36: the gather was 4.5% of a diffuse ray's instructions). A later coherent
+    // stretch of such a batch then goes alone too: slower perhaps, never another hit.
+    void recordGather(uint32_t packets) {
+        if (packets != 0) {
+            packetsSeen_.store(true, std::memory_order_relaxed);
+            return;
+        }
+        if (!packetsSeen_.load(std::memory_order_relaxed) &&
+            emptyGathers_.fetch_add(1, std::memory_order_relaxed) + 1 >= kIncoherentTasks)
+            decided_.store(uint32_t(Choice::Alone), std::memory_order_relaxed);
+    }
     // While sampling: how long a group of `rays` took, as a packet or alone.
     void record(bool packet, uint64_t nanoseconds, uint32_t rays) {
         Way& w = packet ? packet_ : alone_;
@@ -66,12 +79,15 @@ class PacketChooser {
 
   private:
     static constexpr uint64_t kSamples = 8;
+    static constexpr uint32_t kIncoherentTasks = 4;
     struct Way {
         std::atomic<uint64_t> nanos{0}, rays{0}, groups{0};
     };
     Choice fixed_;
     std::atomic<uint32_t> decided_{uint32_t(Choice::Sample)};
     std::atomic<uint32_t> turn_{0};
+    std::atomic<uint32_t> emptyGathers_{0};
+    std::atomic<bool> packetsSeen_{false};
     Way packet_, alone_;
 };
 
