@@ -293,11 +293,7 @@ bool agreesWithControl(const Mesh& m, const Hit& h, const Hit& control, const st
 
 class fragment_edges : public VkasTest {
 protected:
-    static uint32_t fragmentCount(const AccelStruct* as) {
-        uint32_t v;
-        std::memcpy(&v, as->data() + 128, 4);  // docs/FORMAT.md, "Header"
-        return v;
-    }
+    static uint32_t fragmentCount(const AccelStruct* as) { return as->header32(128); }
 
     std::vector<Hit> batch(const AccelStruct* tlas, VkasTraceMode mode, const std::vector<oracle::Ray>& rays) {
         std::vector<VkasRay> in(rays.size());

@@ -23,11 +23,7 @@ constexpr uint32_t kRayNoOpaque = 0x2;  // SPIR-V RayFlagsNoOpaqueKHR
 class spatial_splits : public VkasTest {
 protected:
     // Header fields at their documented offsets (docs/FORMAT.md, "Header"): the records stored and the fragments.
-    static uint32_t header32(const AccelStruct* as, size_t offset) {
-        uint32_t v;
-        std::memcpy(&v, as->data() + offset, 4);
-        return v;
-    }
+    static uint32_t header32(const AccelStruct* as, size_t offset) { return as->header32(offset); }
     static uint32_t primitiveCount(const AccelStruct* as) { return header32(as, 60); }
     static uint32_t recordCount(const AccelStruct* as) { return header32(as, 64); }
     static uint32_t fragmentCount(const AccelStruct* as) { return header32(as, 128); }

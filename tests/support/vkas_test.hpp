@@ -9,6 +9,7 @@
 
 #include <array>
 #include <cstdint>
+#include <cstring>
 #include <deque>
 #include <map>
 #include <memory>
@@ -122,6 +123,12 @@ struct AccelStruct {
     std::shared_ptr<const oracle::Scene> scene;  // top level: the oracle's scene
     uint8_t* data() const { return buffer->mapped + offset; }
     uint64_t reference() const { return uint64_t(handle); }
+    // A u32 header field at its documented offset (docs/FORMAT.md, "Header"), e.g. 128: the fragment count.
+    uint32_t header32(size_t fieldOffset) const {
+        uint32_t v;
+        std::memcpy(&v, data() + fieldOffset, 4);
+        return v;
+    }
 };
 
 struct BuildOptions {

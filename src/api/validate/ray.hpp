@@ -14,8 +14,9 @@ namespace vkas {
 
 // The value rules of a ray (VUID-RuntimeSpirv-OpRayQueryInitializeKHR-*), each written once: the components of
 // RayOrigin and RayDirection finite (06348), RayTmin and RayTmax not NaN (06351), non-negative (06349), and RayTmin
-// at most RayTmax (06350). validateRay reports the broken ones; a batch asks all() first, so that a valid ray costs a few compares
-// and no message is built for it (issue 36: formatting a prefix for every valid ray was 20% of a batch's work).
+// at most RayTmax (06350). validateRay reports the broken ones; a batch asks all() first, so that a valid ray costs a
+// few compares and no message is built for it (issue 36: formatting a prefix for every valid ray was 20% of a batch's
+// work).
 struct RayValueRules {
     bool originFinite, directionFinite, notNaN, nonNegative, ordered;
     bool all() const { return originFinite && directionFinite && notNaN && nonNegative && ordered; }
