@@ -1,18 +1,15 @@
 #include "model_loader.hpp"
 
-#include <assimp/DefaultLogger.hpp>
-#include <assimp/Importer.hpp>
-#include <assimp/LogStream.hpp>
-#include <assimp/postprocess.h>
-#include <assimp/scene.h>
 #include <fcntl.h>
+#include <poll.h>
 #include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <cerrno>
+#include <cstdio>
+#include <cstdlib>
 #include <chrono>
-#include <thread>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -22,42 +19,16 @@
 #include <utility>
 #include <vector>
 
-#include "imported_scene_check.hpp"
+#include "imported_model.hpp"
 #include "input_error.hpp"
 #include "mesh_header_check.hpp"
+#include "model_import.hpp"
 #include "structure_file.hpp"
 
 namespace vkas_tool {
 namespace {
 
 namespace fs = std::filesystem;
-
-// Some importers repair what they find wrong and only log it (assimp's OFF reader clamps an out-of-range vertex
-// index to the last vertex): the first error assimp logs while reading a file fails the load.
-class ErrorCatcher : public Assimp::LogStream {
-public:
-    void write(const char* message) override {
-        if (first.empty() && message) {
-            first = message;
-            while (!first.empty() && (first.back() == '\n' || first.back() == '\r')) first.pop_back();
-            const size_t colon = first.find(": ");  // "Error, T0: OFF: ..." -> "OFF: ..."
-            if (first.rfind("Error", 0) == 0 && colon != std::string::npos) first = first.substr(colon + 2);
-        }
-    }
-    std::string first;
-};
-
-struct AssimpErrorLog {
-    AssimpErrorLog() {
-        Assimp::DefaultLogger::create("", Assimp::Logger::NORMAL, 0);  // no default streams: nothing printed
-        Assimp::DefaultLogger::get()->attachStream(&catcher, Assimp::Logger::Err);
-    }
-    ~AssimpErrorLog() {
-        Assimp::DefaultLogger::get()->detachStream(&catcher, Assimp::Logger::Err);
-        Assimp::DefaultLogger::kill();
-    }
-    ErrorCatcher catcher;
-};
 
 // The checks assimp would report vaguely ("No suitable reader found") or not at all, done first.
 uint64_t checkReadableFile(const std::string& path) {
@@ -74,14 +45,6 @@ uint64_t checkReadableFile(const std::string& path) {
     return size;
 }
 
-Affine toAffine(const aiMatrix4x4& m) {
-    Affine a;
-    const float rows[3][4] = {{m.a1, m.a2, m.a3, m.a4}, {m.b1, m.b2, m.b3, m.b4}, {m.c1, m.c2, m.c3, m.c4}};
-    for (int r = 0; r < 3; ++r)
-        for (int c = 0; c < 4; ++c) a.m[r][c] = rows[r][c];
-    return a;
-}
-
 bool finite(const Affine& a) {
     for (const auto& row : a.m)
         for (float v : row)
@@ -89,86 +52,147 @@ bool finite(const Affine& a) {
     return true;
 }
 
-Vec3 albedoOf(const aiMaterial* material) {
-    aiColor4D c;
-    if (material && material->Get(AI_MATKEY_COLOR_DIFFUSE, c) == AI_SUCCESS && std::isfinite(c.r) &&
-        std::isfinite(c.g) && std::isfinite(c.b)) {
-        const Vec3 v{std::clamp(c.r, 0.0f, 1.0f), std::clamp(c.g, 0.0f, 1.0f), std::clamp(c.b, 0.0f, 1.0f)};
-        if (v.x + v.y + v.z > 0.15f) return v;  // black or unset diffuse: files that rely on textures
-    }
-    return {0.72f, 0.70f, 0.66f};
+bool finite(Vec3 p) { return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z); }
+
+std::string meshName(const ImportedMesh& m) {
+    return "mesh " + std::to_string(m.fileIndex) + (m.name.empty() ? "" : " (\"" + m.name + "\")");
 }
 
-// The mesh's triangles, checked: finite vertices, indices inside the vertex array. Points and lines are dropped.
-Mesh convertMesh(const std::string& path, const aiMesh& am, unsigned index) {
-    const std::string which = "mesh " + std::to_string(index) + (am.mName.length ? " (\"" + std::string(am.mName.C_Str()) + "\")" : "");
-    Mesh m;
-    m.name = am.mName.C_Str();
-    uint64_t triangles = 0;
-    for (unsigned f = 0; f < am.mNumFaces; ++f) triangles += am.mFaces[f].mNumIndices == 3;
-    if (triangles == 0) return m;
-    checkMemory(double(am.mNumVertices) * 24.0 + double(triangles) * 12.0, path + ": " + which);
-    m.positions.reserve(am.mNumVertices);
-    for (unsigned v = 0; v < am.mNumVertices; ++v) {
-        const aiVector3D& p = am.mVertices[v];
-        if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
-            throw InputError(path, which + ": vertex " + std::to_string(v) + " is not finite (" + std::to_string(p.x) +
-                                       ", " + std::to_string(p.y) + ", " + std::to_string(p.z) + ")");
-        m.positions.push_back({p.x, p.y, p.z});
+// importModel in this process, every way it can end as an ImportResult.
+ImportResult importCaught(const std::string& path) {
+    ImportResult r;
+    try {
+        r.model = importModel(path);
+    } catch (const InputError& e) {
+        r.kind = ImportResult::Kind::InputProblem;
+        r.message = e.what();
+        if (r.message.rfind(path + ": ", 0) == 0) r.message.erase(0, path.size() + 2);
+    } catch (const std::bad_alloc&) {
+        r.kind = ImportResult::Kind::OutOfMemory;
+    } catch (const std::exception& e) {
+        r.kind = ImportResult::Kind::OtherError;
+        r.message = e.what();
+    } catch (...) {
+        r.kind = ImportResult::Kind::OtherError;
+        r.message = path + ": assimp failed with an unknown exception";
     }
-    m.indices.reserve(3 * triangles);
-    for (unsigned f = 0; f < am.mNumFaces; ++f) {
-        const aiFace& face = am.mFaces[f];
-        if (face.mNumIndices != 3) continue;
-        for (int k = 0; k < 3; ++k) {
-            if (face.mIndices[k] >= am.mNumVertices)
-                throw InputError(path, which + ": face " + std::to_string(f) + " uses vertex " +
-                                           std::to_string(face.mIndices[k]) + ", but the mesh has " +
-                                           std::to_string(am.mNumVertices) + " vertices");
-            m.indices.push_back(face.mIndices[k]);
-        }
-    }
-    m.computeNormals();
-    return m;
+    return r;
 }
 
-// assimp's importers themselves crash on some damaged files (inside Importer::ReadFile, before anything of vkas sees
-// the data: found by vkas_fuzz_mesh_file). So a child process reads the file first; when it dies, the file is
-// refused and this process never reads it. Reading is deterministic: a file the child read is read here the same way.
-void readInChild(const std::string& path, uint64_t fileSize) {
+// Built with AddressSanitizer (VKAS_SANITIZE): the importer process keeps its stderr, and its report is a failure.
+#if defined(__SANITIZE_ADDRESS__)
+constexpr int kSanitized = 1;
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+constexpr int kSanitized = 1;
+#else
+constexpr int kSanitized = 0;
+#endif
+#else
+constexpr int kSanitized = 0;
+#endif
+constexpr int kParentGone = 3;  // the child's exit status when its result could not be written
+
+bool writeAll(int fd, const uint8_t* p, size_t n) {
+    while (n > 0) {
+        const ssize_t w = write(fd, p, n);
+        if (w < 0 && errno == EINTR) continue;
+        if (w <= 0) return false;
+        p += w, n -= size_t(w);
+    }
+    return true;
+}
+
+// assimp's importers crash, loop forever or write out of bounds without dying on some damaged files (found by
+// vkas_fuzz_mesh_file; the last damages the heap of whatever process runs them, to fail much later). So assimp runs
+// only in a child process, which sends the scene back as plain arrays (imported_model.hpp) and exits: a child that
+// dies or overruns its time refuses the file, and the damage of one file ends with its child.
+ImportResult importInChild(const std::string& path, uint64_t fileSize) {
+    // No child to be had (process or memory limits): the file is read in this process, as the tool once did.
+    int fds[2];
+    if (pipe2(fds, O_CLOEXEC) != 0) return importCaught(path);
     std::fflush(nullptr);
     const pid_t pid = fork();
-    if (pid < 0) return;  // no child: read in this process as before
+    if (pid < 0) {
+        close(fds[0]), close(fds[1]);
+        return importCaught(path);
+    }
     if (pid == 0) {
-        const int null = open("/dev/null", O_WRONLY);  // what glibc or a sanitizer prints as it dies: not ours
-        if (null >= 0) dup2(null, 1), dup2(null, 2);
+        close(fds[0]);
+        const int null = open("/dev/null", O_WRONLY);  // what glibc prints as assimp's damage kills it: not ours
+        if (null >= 0) {
+            dup2(null, 1);
+            if (!kSanitized) dup2(null, 2);  // a sanitizer's report stays on stderr
+            close(null);
+        }
+        for (int sig : {SIGSEGV, SIGBUS, SIGABRT, SIGFPE, SIGILL}) signal(sig, SIG_DFL);  // a crash is a signal
+        std::vector<uint8_t> bytes;
         try {
-            Assimp::Importer importer;
-            importer.ReadFile(path, 0);
+            bytes = encodeImportResult(importCaught(path));
         } catch (...) {
+            ImportResult oom;
+            oom.kind = ImportResult::Kind::OutOfMemory;
+            bytes = encodeImportResult(oom);
         }
-        _exit(0);
+        _exit(writeAll(fds[1], bytes.data(), bytes.size()) ? 0 : kParentGone);
     }
-    // Some importers also loop forever on a damaged file: the child gets 10 s, and 1 s more per MiB of file.
-    const auto limit = std::chrono::steady_clock::now() + std::chrono::seconds(10 + fileSize / 1048576);
-    int status = 0;
+    close(fds[1]);
+    // The child gets 10 s, and 1 s more per MiB of file.
+    const int seconds = int(10 + fileSize / 1048576);
+    const auto limit = std::chrono::steady_clock::now() + std::chrono::seconds(seconds);
+    std::vector<uint8_t> bytes;
+    bool timedOut = false;
     for (;;) {
-        const pid_t done = waitpid(pid, &status, WNOHANG);
-        if (done == pid) break;
-        if (done < 0 && errno != EINTR) return;
-        if (std::chrono::steady_clock::now() > limit) {
-            kill(pid, SIGKILL);
-            waitpid(pid, &status, 0);
-            throw InputError(path, "damaged: assimp's importer did not finish reading it in " +
-                                       std::to_string(10 + fileSize / 1048576) + " s");
+        const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(limit - std::chrono::steady_clock::now());
+        if (left.count() <= 0) {
+            timedOut = true;
+            break;
         }
-        std::this_thread::sleep_for(std::chrono::milliseconds(1));
+        pollfd p{fds[0], POLLIN, 0};
+        const int ready = poll(&p, 1, int(std::min<int64_t>(left.count(), 1000)));
+        if (ready < 0 && errno != EINTR) break;
+        if (ready <= 0) continue;
+        uint8_t chunk[65536];
+        const ssize_t n = read(fds[0], chunk, sizeof chunk);
+        if (n < 0 && errno == EINTR) continue;
+        if (n <= 0) break;  // end of file: the child is done (or dead)
+        bytes.insert(bytes.end(), chunk, chunk + n);
     }
+    close(fds[0]);
+    if (timedOut) kill(pid, SIGKILL);
+    int status = 0;
+    while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+    }
+    if (timedOut)
+        throw InputError(path, "damaged: assimp's importer did not finish reading it in " + std::to_string(seconds) + " s");
     if (WIFSIGNALED(status))
         throw InputError(path, "damaged: assimp's importer crashed reading it (signal " + std::to_string(WTERMSIG(status)) + ")");
-    if (WIFEXITED(status) && WEXITSTATUS(status) != 0)
+    // The child exits 0 or dies by a signal; another exit status is a sanitizer's report (in a sanitized build the
+    // child runs vkas's own checks instrumented, and a finding there is a bug of vkas, not a damaged file).
+    if (kSanitized && WIFEXITED(status) && WEXITSTATUS(status) != 0 && WEXITSTATUS(status) != kParentGone) {
+        std::fprintf(stderr, "vkas: the importer process reading %s ended with a sanitizer report (exit status %d)\n",
+                     path.c_str(), WEXITSTATUS(status));
+        std::abort();
+    }
+    if (!WIFEXITED(status) || WEXITSTATUS(status) != 0)
         throw InputError(path, "damaged: assimp's importer failed reading it (exit status " +
                                    std::to_string(WEXITSTATUS(status)) + ")");
+    try {
+        return decodeImportResult(bytes);
+    } catch (const std::runtime_error& e) {
+        throw InputError(path, std::string("damaged: ") + e.what());
+    }
+}
+
+// The scene the importer found, or what it said about the file.
+ImportedModel importedModel(const std::string& path, uint64_t fileSize) {
+    ImportResult r = importInChild(path, fileSize);
+    switch (r.kind) {
+        case ImportResult::Kind::Model: return std::move(r.model);
+        case ImportResult::Kind::InputProblem: throw InputError(path, r.message);
+        case ImportResult::Kind::OutOfMemory: throw InputError(path, "out of memory while reading it");
+        default: throw std::runtime_error(r.message);
+    }
 }
 
 }  // namespace
@@ -179,93 +203,68 @@ ModelInfo loadModel(const std::string& path, Scene& scene) {
         throw InputError(path, "is a serialized acceleration structure, not a mesh (`vkas inspect` reads it)");
     checkDeclaredCounts(path, fileSize);
     checkMemory(8.0 * double(fileSize), "loading " + path);  // assimp holds the file and its own copy of the meshes
+    ImportedModel model = importedModel(path, fileSize);
+    if (model.meshes.empty()) throw InputError(path, "holds no triangles (only points or lines)");
 
-    readInChild(path, fileSize);
-    Assimp::Importer importer;
-    importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
-    const aiScene* s = nullptr;
-    AssimpErrorLog errors;
-    auto failed = [&] {
-        std::string why = importer.GetErrorString();
-        if (why.find("bad_alloc") != std::string::npos) throw InputError(path, "out of memory while reading it");
-        if (why.find("No meshes remaining") != std::string::npos)  // what assimp says once points and lines are gone
-            throw InputError(path, "holds no triangles (only points or lines)");
-        throw InputError(path, "not a mesh file assimp can read: " + (why.empty() ? std::string("unknown error") : why));
-    };
-    // Read with no post-processing step: the steps trust what the importer made, and a truncated or damaged file
-    // makes faces of garbage indices (SIGSEGV in Triangulate) or polygon claims without polygons (Triangulate's
-    // assertion aborts). checkImportedScene checks the scene first and makes the steps' preconditions true.
-    try {
-        s = importer.ReadFile(path, 0);
-    } catch (const std::bad_alloc&) {
-        throw InputError(path, "out of memory while reading it");
+    // What the tool builds from: finite vertices, indices inside their mesh, whole triangles.
+    for (const ImportedMesh& m : model.meshes) {
+        for (size_t v = 0; v < m.positions.size(); ++v) {
+            const Vec3 p = m.positions[v];
+            if (!finite(p))
+                throw InputError(path, meshName(m) + ": vertex " + std::to_string(v) + " is not finite (" +
+                                           std::to_string(p.x) + ", " + std::to_string(p.y) + ", " + std::to_string(p.z) + ")");
+        }
+        if (m.indices.size() % 3 != 0) throw InputError(path, meshName(m) + ": a triangle with fewer than three corners");
+        for (size_t k = 0; k < m.indices.size(); ++k)
+            if (m.indices[k] >= m.positions.size())
+                throw InputError(path, meshName(m) + ": triangle " + std::to_string(k / 3) + " uses vertex " +
+                                           std::to_string(m.indices[k]) + ", but the mesh has " +
+                                           std::to_string(m.positions.size()) + " vertices");
     }
-    if (!s) failed();
-    if (!errors.catcher.first.empty()) throw InputError(path, "malformed: " + errors.catcher.first);
-    checkImportedScene(path, importer);
-    try {
-        s = importer.ApplyPostProcessing(aiProcess_Triangulate | aiProcess_JoinIdenticalVertices | aiProcess_SortByPType);
-    } catch (const std::bad_alloc&) {
-        throw InputError(path, "out of memory while reading it");
-    }
-    if (!s) failed();
-    if (!errors.catcher.first.empty()) throw InputError(path, "malformed: " + errors.catcher.first);
-    if (!s->mRootNode || s->mNumMeshes == 0) throw InputError(path, "holds no meshes");
 
     ModelInfo info;
     info.path = path;
     const uint32_t firstMaterial = static_cast<uint32_t>(scene.materials.size());
-    for (unsigned i = 0; i < std::max(1u, s->mNumMaterials); ++i)
-        scene.materials.push_back({albedoOf(i < s->mNumMaterials ? s->mMaterials[i] : nullptr)});
+    for (const Vec3& albedo : model.albedos) scene.materials.push_back({albedo});
 
-    // One bottom level per mesh with triangles; blasOf[i] = its index in scene.blases, or -1.
-    std::vector<int64_t> blasOf(s->mNumMeshes, -1);
-    for (unsigned i = 0; i < s->mNumMeshes; ++i) {
-        Mesh m = convertMesh(path, *s->mMeshes[i], i);
-        if (m.indices.empty()) continue;
+    // One bottom level per mesh (all have triangles): mesh i is bottom level firstBlas + i.
+    const uint32_t firstBlas = static_cast<uint32_t>(scene.blases.size());
+    for (ImportedMesh& im : model.meshes) {
+        Mesh m;
+        m.name = std::move(im.name);
+        m.positions = std::move(im.positions);
+        m.indices = std::move(im.indices);
+        m.computeNormals();
         info.triangles += m.triangleCount();
         info.vertices += m.positions.size();
         scene.meshes.push_back(std::make_unique<Mesh>(std::move(m)));
         BlasDesc blas;
-        blas.name = scene.meshes.back()->name.empty() ? "mesh " + std::to_string(i) : scene.meshes.back()->name;
+        blas.name = scene.meshes.back()->name.empty() ? "mesh " + std::to_string(im.fileIndex) : scene.meshes.back()->name;
         blas.geometries.push_back({scene.meshes.back().get(), VertexLayout::Float3, VK_INDEX_TYPE_UINT32, {},
                                    VK_GEOMETRY_OPAQUE_BIT_KHR});
-        blasOf[i] = static_cast<int64_t>(scene.blases.size());
         scene.blases.push_back(std::move(blas));
         ++info.meshes;
     }
-    if (info.meshes == 0) throw InputError(path, "holds no triangles (only points or lines)");
 
-    // The node tree, depth first with an explicit stack (a deep hierarchy must not overflow ours).
-    std::vector<std::pair<const aiNode*, aiMatrix4x4>> stack{{s->mRootNode, s->mRootNode->mTransformation}};
-    while (!stack.empty()) {
-        auto [node, world] = stack.back();
-        stack.pop_back();
-        const Affine transform = toAffine(world);
-        for (unsigned k = 0; k < node->mNumMeshes; ++k) {
-            const unsigned mesh = node->mMeshes[k];
-            if (mesh >= s->mNumMeshes || blasOf[mesh] < 0) continue;
-            if (!finite(transform))
-                throw InputError(path, "node \"" + std::string(node->mName.C_Str()) + "\" has a non-finite transform");
-            // An instance transform must be invertible (VUID-VkTransformMatrixKHR-matrix-03799: vkas refuses the
-            // build otherwise); the same determinant in double precision.
-            const auto& m = transform.m;
-            const double det = double(m[0][0]) * (double(m[1][1]) * m[2][2] - double(m[1][2]) * m[2][1]) -
-                               double(m[0][1]) * (double(m[1][0]) * m[2][2] - double(m[1][2]) * m[2][0]) +
-                               double(m[0][2]) * (double(m[1][0]) * m[2][1] - double(m[1][1]) * m[2][0]);
-            if (!(det != 0.0 && std::isfinite(det)))
-                throw InputError(path, "node \"" + std::string(node->mName.C_Str()) + "\" has a transform that is not invertible");
-            InstanceDesc inst;
-            inst.blas = static_cast<uint32_t>(blasOf[mesh]);
-            inst.transform = transform;
-            inst.customIndex = firstMaterial + std::min(s->mMeshes[mesh]->mMaterialIndex, std::max(1u, s->mNumMaterials) - 1);
-            // Files disagree on winding and many meshes are open: shade both sides.
-            inst.flags = VK_GEOMETRY_INSTANCE_TRIANGLE_FACING_CULL_DISABLE_BIT_KHR;
-            scene.instances.push_back(inst);
-            ++info.instances;
-        }
-        for (unsigned c = node->mNumChildren; c-- > 0;)
-            if (node->mChildren[c]) stack.push_back({node->mChildren[c], world * node->mChildren[c]->mTransformation});
+    for (const ImportedInstance& im : model.instances) {
+        if (!finite(im.transform))
+            throw InputError(path, "node \"" + im.node + "\" has a non-finite transform");
+        // An instance transform must be invertible (VUID-VkTransformMatrixKHR-matrix-03799: vkas refuses the
+        // build otherwise); the same determinant in double precision.
+        const auto& m = im.transform.m;
+        const double det = double(m[0][0]) * (double(m[1][1]) * m[2][2] - double(m[1][2]) * m[2][1]) -
+                           double(m[0][1]) * (double(m[1][0]) * m[2][2] - double(m[1][2]) * m[2][0]) +
+                           double(m[0][2]) * (double(m[1][0]) * m[2][1] - double(m[1][1]) * m[2][0]);
+        if (!(det != 0.0 && std::isfinite(det)))
+            throw InputError(path, "node \"" + im.node + "\" has a transform that is not invertible");
+        InstanceDesc inst;
+        inst.blas = firstBlas + im.mesh;
+        inst.transform = im.transform;
+        inst.customIndex = firstMaterial + im.material;
+        // Files disagree on winding and many meshes are open: shade both sides.
+        inst.flags = VK_GEOMETRY_INSTANCE_TRIANGLE_FACING_CULL_DISABLE_BIT_KHR;
+        scene.instances.push_back(inst);
+        ++info.instances;
     }
     if (info.instances == 0) throw InputError(path, "no node of the file places its meshes");
     return info;
