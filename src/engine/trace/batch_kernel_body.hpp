@@ -81,10 +81,12 @@ static inline void walkTree(Walk& w, const format::Node* nodes, const ShearedRay
                 ref = format::kEmptyRef;
                 break;
             }
-            // Node and record loads are the cache misses of a traversal: ask for what the hit children need now.
-            for (uint32_t k = 0; k < hits; ++k)
+            // Node loads are the cache misses of a traversal: the children pushed for later are asked for now (the
+            // one entered is read at once).
+            for (uint32_t k = 0; k + 1 < hits; ++k) {
                 if (format::isInternal(refs[k])) prefetchNode(nodes + format::nodeIndex(refs[k]));
-            for (uint32_t k = 0; k + 1 < hits; ++k) pushChild(s.stackRef, s.stackDist, sp, refs[k], dist[k]);
+                pushChild(s.stackRef, s.stackDist, sp, refs[k], dist[k]);
+            }
             ref = refs[hits - 1];
         }
         if (format::isLeaf(ref)) {

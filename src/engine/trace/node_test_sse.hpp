@@ -10,6 +10,7 @@
 #pragma once
 
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
 
 #include "engine/format/layout.hpp"
@@ -31,16 +32,20 @@ inline float maxNoNan(float a, float b) { return b > a ? b : a; }  // a NaN b le
 inline float minNoNan(float a, float b) { return b < a ? b : a; }
 }  // namespace detail
 
-// The ray's slab planes for one node: near and far planes per axis, chosen by the sign of the direction.
+// The ray's slab planes for one node: near and far planes per axis, chosen by the sign of the direction (the
+// offsets ShearedRay resolved once per ray).
 struct NodePlanes {
     const float *nearX, *farX, *nearY, *farY, *nearZ, *farZ;
     NodePlanes(const format::Node& node, const ShearedRay& r) {
-        const bool nx = r.invDir[0] < 0.0f, ny = r.invDir[1] < 0.0f, nz = r.invDir[2] < 0.0f;
-        nearX = nx ? node.upperX : node.lowerX, farX = nx ? node.lowerX : node.upperX;
-        nearY = ny ? node.upperY : node.lowerY, farY = ny ? node.lowerY : node.upperY;
-        nearZ = nz ? node.upperZ : node.lowerZ, farZ = nz ? node.lowerZ : node.upperZ;
+        const char* base = reinterpret_cast<const char*>(&node);
+        nearX = reinterpret_cast<const float*>(base + r.planes.nearPlane[0]), farX = reinterpret_cast<const float*>(base + r.planes.farPlane[0]);
+        nearY = reinterpret_cast<const float*>(base + r.planes.nearPlane[1]), farY = reinterpret_cast<const float*>(base + r.planes.farPlane[1]);
+        nearZ = reinterpret_cast<const float*>(base + r.planes.nearPlane[2]), farZ = reinterpret_cast<const float*>(base + r.planes.farPlane[2]);
     }
 };
+static_assert(offsetof(format::Node, upperX) == 32 && offsetof(format::Node, lowerY) == 64 &&
+              offsetof(format::Node, upperY) == 96 && offsetof(format::Node, lowerZ) == 128 &&
+              offsetof(format::Node, upperZ) == 160, "ShearedRay's plane offsets (ray.hpp) follow format::Node");
 
 // Distances at which the ray enters each child box of `node` (+inf where it misses), 4 lanes at a time. Returns the
 // mask of the children hit at a finite distance (bit i: child i).

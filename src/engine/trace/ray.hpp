@@ -3,8 +3,16 @@
 #pragma once
 
 #include <cmath>
+#include <cstdint>
 
 namespace vkas {
+
+// The plane offsets of ShearedRay for each octant of the direction (bit i: invDir[i] < 0, the ray enters a box
+// through its upper plane on axis i: 32 bytes past the lower one; each axis is 64 bytes past the previous, as
+// format::Node lays them out, which node_test_sse.hpp checks).
+struct OctantPlanes {
+    uint32_t nearPlane[3], farPlane[3];
+};
 
 struct ShearedRay {
     float org[3];
@@ -12,39 +20,63 @@ struct ShearedRay {
     float invDir[3];  // for box tests
     int kx, ky, kz;
     float sx, sy, sz;
+    // The byte offsets in a node (format::Node: lowerX, upperX, lowerY, upperY, lowerZ, upperZ, 8 floats each) of the
+    // planes the ray meets first (near) and last (far) on each axis, resolved once per ray from the sign of invDir,
+    // not once per node (node_test_sse.hpp's NodePlanes).
+    OctantPlanes planes;
 };
 
 // The axis of the largest direction component (|d| per axis), the watertight test's kz; ties go to the later axis
 // of each comparison, as the shear has always chosen.
 inline int dominantAxis(float ax, float ay, float az) { return (ax > ay) ? (ax > az ? 0 : 2) : (ay > az ? 1 : 2); }
 
+constexpr OctantPlanes octantPlanes(uint32_t octant) {
+    OctantPlanes p{};
+    for (uint32_t i = 0; i < 3; ++i) {
+        const uint32_t upper = (octant >> i) & 1u ? 32u : 0u;
+        p.nearPlane[i] = 64u * i + upper;
+        p.farPlane[i] = 64u * i + 32u - upper;
+    }
+    return p;
+}
+inline constexpr OctantPlanes kOctantPlanes[8] = {octantPlanes(0), octantPlanes(1), octantPlanes(2), octantPlanes(3),
+                                                  octantPlanes(4), octantPlanes(5), octantPlanes(6), octantPlanes(7)};
+
 inline void prepareShearedRay(ShearedRay& r, const float org[3], const float dir[3]) {
-    for (int i = 0; i < 3; ++i) {
-        r.org[i] = org[i];
-        r.dir[i] = dir[i];
-        r.invDir[i] = 1.0f / dir[i];
+    // Everything in locals first: `r` may alias `org` and `dir` for the compiler, which would reload them after
+    // every store.
+    const float o0 = org[0], o1 = org[1], o2 = org[2], d[3] = {dir[0], dir[1], dir[2]};
+    const float i0 = 1.0f / d[0], i1 = 1.0f / d[1], i2 = 1.0f / d[2];
+    // A negative reciprocal (dir < 0, or -0: invDir = -inf) enters a box through its upper plane.
+    const OctantPlanes& planes = kOctantPlanes[(i0 < 0.0f ? 1u : 0u) | (i1 < 0.0f ? 2u : 0u) | (i2 < 0.0f ? 4u : 0u)];
+    const int kz = dominantAxis(std::fabs(d[0]), std::fabs(d[1]), std::fabs(d[2]));
+    static constexpr int kNext[3] = {1, 2, 0};
+    int kx = kNext[kz], ky = kNext[kx];
+    if (d[kz] < 0.0f) {  // keep the winding of the sheared triangle
+        const int t = kx;
+        kx = ky;
+        ky = t;
     }
-    float ax = std::fabs(dir[0]), ay = std::fabs(dir[1]), az = std::fabs(dir[2]);
-    r.kz = dominantAxis(ax, ay, az);
-    r.kx = (r.kz + 1) % 3;
-    r.ky = (r.kx + 1) % 3;
-    if (dir[r.kz] < 0.0f) {  // keep the winding of the sheared triangle
-        int t = r.kx;
-        r.kx = r.ky;
-        r.ky = t;
-    }
-    r.sx = dir[r.kx] / dir[r.kz];
-    r.sy = dir[r.ky] / dir[r.kz];
-    r.sz = 1.0f / dir[r.kz];
+    const float sx = d[kx] / d[kz], sy = d[ky] / d[kz], sz = 1.0f / d[kz];
+    r.org[0] = o0, r.org[1] = o1, r.org[2] = o2;
+    r.dir[0] = d[0], r.dir[1] = d[1], r.dir[2] = d[2];
+    r.invDir[0] = i0, r.invDir[1] = i1, r.invDir[2] = i2;
+    r.planes = planes;
+    r.kx = kx, r.ky = ky, r.kz = kz;
+    r.sx = sx, r.sy = sy, r.sz = sz;
 }
 
 // The ray in an instance's object space: the 3x4 row-major world-to-object matrix applied in double, each result
 // rounded once.
 inline void transformRay(const float (*m)[4], const float o[3], const float d[3], float oo[3], float od[3]) {
+    const double o0 = o[0], o1 = o[1], o2 = o[2], d0 = d[0], d1 = d[1], d2 = d[2];  // (oo, od may alias m, o, d)
+    float ro[3], rd[3];
     for (int r = 0; r < 3; ++r) {
-        oo[r] = float(double(m[r][0]) * o[0] + double(m[r][1]) * o[1] + double(m[r][2]) * o[2] + double(m[r][3]));
-        od[r] = float(double(m[r][0]) * d[0] + double(m[r][1]) * d[1] + double(m[r][2]) * d[2]);
+        const double m0 = m[r][0], m1 = m[r][1], m2 = m[r][2], m3 = m[r][3];
+        ro[r] = float(m0 * o0 + m1 * o1 + m2 * o2 + m3);
+        rd[r] = float(m0 * d0 + m1 * d1 + m2 * d2);
     }
+    for (int r = 0; r < 3; ++r) oo[r] = ro[r], od[r] = rd[r];
 }
 
 }  // namespace vkas

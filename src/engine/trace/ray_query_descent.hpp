@@ -15,9 +15,10 @@ inline ChildRef descend(RayQueryState& q, const Node* nodes, ChildRef ref, const
         ChildRef refs[kNodeWidth];
         const uint32_t hits = orderHitChildren(node, nodeTest(node, r, q.tMin, q.tMax, entry), entry, refs, dist);
         if (hits == 0) return kEmptyRef;
-        for (uint32_t k = 0; k < hits; ++k)
+        for (uint32_t k = 0; k + 1 < hits; ++k) {  // (the walk of batch_kernel_body.hpp: prefetch what is pushed)
             if (isInternal(refs[k])) prefetchNode(nodes + nodeIndex(refs[k]));
-        for (uint32_t k = 0; k + 1 < hits; ++k) pushChild(q.stackRef, q.stackDist, q.sp, refs[k], dist[k]);
+            pushChild(q.stackRef, q.stackDist, q.sp, refs[k], dist[k]);
+        }
         ref = refs[hits - 1];
     }
     return ref;

@@ -43,14 +43,33 @@ inline void pushChild(format::ChildRef* stackRef, float* stackDist, uint32_t& sp
 
 // The children of `node` in `mask` (entry distances in entry[], from the node test) in the order a traversal
 // pushes them: by descending entry distance, a later slot after an earlier one at equal distance, so the nearest
-// is last (popped first). Empty slots are skipped. Returns their number.
+// is last (popped first). Returns their number.
+//
+// An empty slot (bounds +inf / -inf) never has a finite entry distance for a ray of finite origin and direction;
+// for one with a NaN it may, and then its reference, kEmptyRef (0), is ordered like any other: a traversal pops it
+// as neither a node nor a leaf, so no slot is tested for emptiness here.
 inline uint32_t orderHitChildren(const format::Node& node, uint32_t mask, const float entry[format::kNodeWidth],
                                  format::ChildRef ref[format::kNodeWidth], float dist[format::kNodeWidth]) {
+    if (mask == 0) return 0;
+    const uint32_t first = uint32_t(__builtin_ctz(mask));
+    const uint32_t rest = mask & (mask - 1);
+    if (rest == 0) {  // one child: most nodes of an incoherent ray
+        ref[0] = node.child[first];
+        dist[0] = entry[first];
+        return 1;
+    }
+    if ((rest & (rest - 1)) == 0) {  // two children: the later slot goes first only when strictly farther
+        const uint32_t second = uint32_t(__builtin_ctz(rest));
+        const bool swap = entry[first] < entry[second];
+        const uint32_t a = swap ? second : first, b = swap ? first : second;
+        ref[0] = node.child[a], dist[0] = entry[a];
+        ref[1] = node.child[b], dist[1] = entry[b];
+        return 2;
+    }
     uint32_t hits = 0;
     // Only the children hit are visited, in slot order (bit scan), so the branches follow the hits, not the slots.
     for (; mask != 0; mask &= mask - 1) {
         const uint32_t i = uint32_t(__builtin_ctz(mask));
-        if (node.child[i] == format::kEmptyRef) continue;  // (the mask has only finite entries)
         const float tNear = entry[i];
         uint32_t k = hits++;  // insertion by descending distance
         while (k > 0 && dist[k - 1] < tNear) {
