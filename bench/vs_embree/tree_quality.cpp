@@ -6,7 +6,7 @@
 // same rays with rtcIntersect1 / rtcOccluded1 (ROBUST scene, one thread) inside vb::measuredEmbree instead: with
 // --validation (the default vkas device) this is what bench/vs_embree/count-instructions.sh compares (issue 36).
 //   vkas_bench_tree_quality --scene torcs-forza [--flags default fast-trace fast-build] [--rays N] [--kind diffuse]
-//                           [--ray-query] [--denormals-are-zero] [--validation] [--engine vkas|embree]
+//                           [--ray-query [--no-opaque]] [--denormals-are-zero] [--validation] [--engine vkas|embree]
 #include <CLI/CLI.hpp>
 
 #include <xmmintrin.h>
@@ -33,8 +33,9 @@ __attribute__((noinline)) double measuredEmbree(EmbreeEngine& embree, bool anyHi
 }
 
 __attribute__((noinline)) double measuredQuery(VkasEngine& engine, VkAccelerationStructureKHR tlas, bool anyHit,
-                                               const std::vector<VkasRay>& rays, std::vector<Hit>& hits, int reps) {
-    return engine.traceRayQuery(tlas, anyHit, rays, hits, reps);
+                                               const std::vector<VkasRay>& rays, std::vector<Hit>& hits, int reps,
+                                               uint32_t extraFlags) {
+    return engine.traceRayQuery(tlas, anyHit, rays, hits, reps, extraFlags);
 }
 
 }  // namespace vb
@@ -47,7 +48,7 @@ int main(int argc, char** argv) {
     std::vector<std::string> kinds{"camera", "diffuse", "shadow"};
     size_t rayCount = size_t(1) << 18;
     int reps = 3;
-    bool denormalsAreZero = false, rayQuery = false, validation = false;
+    bool denormalsAreZero = false, rayQuery = false, validation = false, noOpaque = false;
     std::string engineName = "vkas";
     app.add_option("--scene", sceneName, "a named scene of vkas_bench_embree (--list there)");
     app.add_option("--flags", flagNames, "build preferences: default, fast-trace, fast-build");
@@ -58,6 +59,9 @@ int main(int argc, char** argv) {
                  "set MXCSR's flush-to-zero and denormals-are-zero bits on this thread first (a diagnostic: does a "
                  "tree's speed hang on denormal operands? with --ray-query, the traversal runs on this thread)");
     app.add_flag("--ray-query", rayQuery, "trace with vkasRayQuery* on this thread instead of vkasTraceRays");
+    app.add_flag("--no-opaque", noOpaque,
+                 "with --ray-query: the ray flag NoOpaque, so that every candidate goes to the application (which "
+                 "drops it): the cost of queries over non-opaque geometry");
     app.add_flag("--validation", validation, "vkas: the default device (validation on), as users get it");
     app.add_option("--engine", engineName, "vkas, or embree: rtcIntersect1 / rtcOccluded1 on the same rays (ROBUST "
                    "scene of Embree's default quality; --flags and --ray-query do not apply)");
@@ -113,7 +117,8 @@ int main(int argc, char** argv) {
             for (const std::string& k : kinds) {
                 if (!rays.count(k)) throw std::runtime_error("unknown --kind " + k);
                 std::vector<Hit> hits;
-                const double ms = rayQuery ? measuredQuery(engine, tlas.s.as, k == "shadow", rays[k], hits, reps)
+                const double ms = rayQuery ? measuredQuery(engine, tlas.s.as, k == "shadow", rays[k], hits, reps,
+                                                         noOpaque ? VKAS_RAY_FLAG_NO_OPAQUE : 0u)
                                           : measuredTrace(engine, tlas.s.as, k == "shadow", rays[k], hits, reps);
                 std::printf(" %9.3f", double(rays[k].size()) / ms / 1000.0);
             }

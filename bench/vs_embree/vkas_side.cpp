@@ -292,9 +292,9 @@ double VkasEngine::traceBatch(VkAccelerationStructureKHR tlas, bool anyHit, cons
 }
 
 double VkasEngine::traceRayQuery(VkAccelerationStructureKHR tlas, bool anyHit, const std::vector<VkasRay>& rays,
-                                 std::vector<Hit>& hits, int reps) {
+                                 std::vector<Hit>& hits, int reps, uint32_t extraFlags) {
     hits.assign(rays.size(), Hit{});
-    const uint32_t flags = anyHit ? VKAS_RAY_FLAG_TERMINATE_ON_FIRST_HIT : VKAS_RAY_FLAG_NONE;
+    const uint32_t flags = (anyHit ? VKAS_RAY_FLAG_TERMINATE_ON_FIRST_HIT : VKAS_RAY_FLAG_NONE) | extraFlags;
     auto q = std::make_unique<VkasRayQuery>();
     double best = 1e300;
     for (int r = 0; r < reps; ++r) {

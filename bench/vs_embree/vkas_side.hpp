@@ -69,9 +69,10 @@ public:
     // Batch traversal on the device's worker threads; returns the best time of `reps` calls.
     double traceBatch(VkAccelerationStructureKHR tlas, bool anyHit, const std::vector<VkasRay>& rays,
                       std::vector<Hit>& hits, int reps);
-    // Ray queries on the calling thread, one after another; returns the best time.
+    // Ray queries on the calling thread, one after another; returns the best time. `extraFlags` are added to every
+    // query's ray flags (VKAS_RAY_FLAG_NO_OPAQUE: every candidate goes to the application, which drops it).
     double traceRayQuery(VkAccelerationStructureKHR tlas, bool anyHit, const std::vector<VkasRay>& rays,
-                         std::vector<Hit>& hits, int reps);
+                         std::vector<Hit>& hits, int reps, uint32_t extraFlags = 0);
 
 private:
     Structure create(VkAccelerationStructureTypeKHR type, VkDeviceSize size);

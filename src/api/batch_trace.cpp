@@ -156,6 +156,7 @@ VkResult traceBatch(VkDevice device, VkAccelerationStructureKHR topLevel, VkasTr
             if (!q) q = vkas::makeHostUnique<vkas::RayQueryState>();
             vkas::queryInitialize(*q, block, vkas::resolveAccelerationStructure, flags, cullMask, r.origin, r.tMin,
                                   r.direction, r.tMax);
+            vkas::queryWithoutKernel(*q);  // the kernel declined this ray, or AABB candidates go to `intersect`
             runQuery(*q, uint32_t(i), intersect, userData);
             writeHit(q->committed, pHits[i]);
         };

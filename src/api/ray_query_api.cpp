@@ -73,7 +73,7 @@ VKAS_API void vkasRayQueryInitialize(VkasRayQuery* q, VkAccelerationStructureKHR
     const vkas::AccelerationStructure* tlas = liveStructure(topLevel);
     vkas::Validator v(tlas ? tlas->device : nullptr, "vkasRayQueryInitialize");
     bool valid = true;
-    if (v.enabled())
+    if (v.enabled() && !vkas::queryRayValid(topLevel, tlas, rayFlags, origin, tMin, direction, tMax))
         valid = vkas::checkTopLevelHandle(v, topLevel, tlas) &&
                 vkas::validateRay(v, tlas, rayFlags, origin, tMin, direction, tMax, "");
     const std::byte* block = (tlas && valid) ? tlas->block() : nullptr;
@@ -95,8 +95,9 @@ VKAS_API void vkasRayQueryInitializeMotion(VkasRayQuery* q, VkAccelerationStruct
     vkas::Validator v(tlas ? tlas->device : nullptr, "vkasRayQueryInitializeMotion");
     bool valid = true;
     if (v.enabled()) {
-        valid = vkas::checkTopLevelHandle(v, topLevel, tlas) &&
-                vkas::validateRay(v, tlas, rayFlags, origin, tMin, direction, tMax, "");
+        if (!vkas::queryRayValid(topLevel, tlas, rayFlags, origin, tMin, direction, tMax))
+            valid = vkas::checkTopLevelHandle(v, topLevel, tlas) &&
+                    vkas::validateRay(v, tlas, rayFlags, origin, tMin, direction, tMax, "");
         valid &= v.check(time >= 0.0f && time <= 1.0f, "VUID-RuntimeSpirv-OpTraceRayMotionNV-06366",
                          "the ray time %g is not between 0.0 and 1.0.", double(time));
     } else if (!(time >= 0.0f && time <= 1.0f)) {

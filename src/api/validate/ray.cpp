@@ -5,22 +5,11 @@
 
 namespace vkas {
 
-namespace {
-
-constexpr uint32_t kOpaqueGroup = VKAS_RAY_FLAG_OPAQUE | VKAS_RAY_FLAG_NO_OPAQUE | VKAS_RAY_FLAG_CULL_OPAQUE |
-                                  VKAS_RAY_FLAG_CULL_NO_OPAQUE;
-constexpr uint32_t kTriangleGroup = VKAS_RAY_FLAG_SKIP_TRIANGLES | VKAS_RAY_FLAG_CULL_BACK_FACING_TRIANGLES |
-                                    VKAS_RAY_FLAG_CULL_FRONT_FACING_TRIANGLES;
-
-bool atMostOneBit(uint32_t v) { return (v & (v - 1)) == 0; }
-
-}  // namespace
-
-// The ray-parameter rules of OpRayQueryInitializeKHR (and of the batch call). Returns false when violated.
 bool validateRay(Validator& v, const AccelerationStructure* tlas, uint32_t rayFlags, const float origin[3],
                  float tMin, const float direction[3], float tMax, const char* where) {
-    bool ok = true;
     const RayValueRules rules = rayValueRules(origin, tMin, direction, tMax);
+    const RayFlagRules flags = rayFlagRules(rayFlags);
+    bool ok = true;
     ok &= v.check(rules.originFinite, "VUID-RuntimeSpirv-OpRayQueryInitializeKHR-06348",
                   "%sthe ray origin (%g, %g, %g) is not finite.", where, origin[0], origin[1], origin[2]);
     ok &= v.check(rules.directionFinite, "VUID-RuntimeSpirv-OpRayQueryInitializeKHR-06348",
@@ -31,24 +20,19 @@ bool validateRay(Validator& v, const AccelerationStructure* tlas, uint32_t rayFl
                   "%sRayTmin %g and RayTmax %g must be non-negative.", where, tMin, tMax);
     ok &= v.check(rules.ordered, "VUID-RuntimeSpirv-OpRayQueryInitializeKHR-06350",
                   "%sRayTmin %g is greater than RayTmax %g.", where, tMin, tMax);
-    ok &= v.check(atMostOneBit(rayFlags & kOpaqueGroup), "VUID-RuntimeSpirv-OpRayQueryInitializeKHR-06891",
+    ok &= v.check(flags.opaqueGroup, "VUID-RuntimeSpirv-OpRayQueryInitializeKHR-06891",
                   "%sRayFlags 0x%x has more than one of Opaque, NoOpaque, CullOpaque and CullNoOpaque.", where,
                   rayFlags);
-    ok &= v.check(atMostOneBit(rayFlags & kTriangleGroup), "VUID-RuntimeSpirv-OpRayQueryInitializeKHR-06890",
+    ok &= v.check(flags.triangleGroup, "VUID-RuntimeSpirv-OpRayQueryInitializeKHR-06890",
                   "%sRayFlags 0x%x has more than one of SkipTriangles, CullBackFacing and CullFrontFacing.", where,
                   rayFlags);
     // ForceOpacityMicromap2StateEXT (0x400) needs the RayTracingOpacityMicromapKHR capability (VUID 11542), which
     // vkas's host ray queries have since VK_EXT_opacity_micromap (docs/VALIDATION.md): the flag is accepted.
-    ok &= v.check(!((rayFlags & VKAS_RAY_FLAG_SKIP_TRIANGLES) && (rayFlags & VKAS_RAY_FLAG_SKIP_AABBS)),
-                  "VUID-RuntimeSpirv-OpRayQueryInitializeKHR-06889",
+    ok &= v.check(flags.notBothSkips, "VUID-RuntimeSpirv-OpRayQueryInitializeKHR-06889",
                   "%sRayFlags 0x%x has both SkipTriangles and SkipAABBs.", where, rayFlags);
-    if (tlas) {
-        const std::byte* block = tlas->block();
-        const auto* h = block ? format::header(block) : nullptr;
-        ok &= v.check(h && h->magic == format::kMagic && h->type == uint32_t(format::StructureType::TopLevel),
-                      "VUID-RuntimeSpirv-OpRayQueryInitializeKHR-06352",
+    if (tlas)
+        ok &= v.check(builtTopLevel(*tlas), "VUID-RuntimeSpirv-OpRayQueryInitializeKHR-06352",
                       "%sthe acceleration structure is not a built top-level structure.", where);
-    }
     return ok;
 }
 

@@ -9,6 +9,8 @@
 
 #include "api/objects.hpp"
 #include "api/validate/validator.hpp"
+#include "engine/format/layout.hpp"
+#include "vkas/vkas.h"
 
 namespace vkas {
 
@@ -25,6 +27,38 @@ inline RayValueRules rayValueRules(const float origin[3], float tMin, const floa
     auto finite3 = [](const float* p) { return std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]); };
     return {finite3(origin), finite3(direction), !std::isnan(tMin) && !std::isnan(tMax),
             !(tMin < 0.0f) && !(tMax < 0.0f), !(tMin > tMax)};
+}
+
+// The ray-flag rules, each written once: at most one of Opaque, NoOpaque, CullOpaque and CullNoOpaque (06891), at
+// most one of SkipTriangles, CullBackFacing and CullFrontFacing (06890), not both SkipTriangles and SkipAABBs (06889).
+struct RayFlagRules {
+    bool opaqueGroup, triangleGroup, notBothSkips;
+    bool all() const { return opaqueGroup && triangleGroup && notBothSkips; }
+};
+inline RayFlagRules rayFlagRules(uint32_t rayFlags) {
+    constexpr uint32_t kOpaqueGroup = VKAS_RAY_FLAG_OPAQUE | VKAS_RAY_FLAG_NO_OPAQUE | VKAS_RAY_FLAG_CULL_OPAQUE |
+                                      VKAS_RAY_FLAG_CULL_NO_OPAQUE;
+    constexpr uint32_t kTriangleGroup = VKAS_RAY_FLAG_SKIP_TRIANGLES | VKAS_RAY_FLAG_CULL_BACK_FACING_TRIANGLES |
+                                        VKAS_RAY_FLAG_CULL_FRONT_FACING_TRIANGLES;
+    constexpr uint32_t kBothSkips = VKAS_RAY_FLAG_SKIP_TRIANGLES | VKAS_RAY_FLAG_SKIP_AABBS;
+    auto atMostOneBit = [](uint32_t v) { return (v & (v - 1)) == 0; };
+    return {atMostOneBit(rayFlags & kOpaqueGroup), atMostOneBit(rayFlags & kTriangleGroup),
+            (rayFlags & kBothSkips) != kBothSkips};
+}
+
+// The structure rule (06352): `tlas` is a built top-level structure.
+inline bool builtTopLevel(const AccelerationStructure& tlas) {
+    const std::byte* block = tlas.block();
+    const format::Header* h = block ? format::header(block) : nullptr;
+    return h && h->magic == format::kMagic && h->type == uint32_t(format::StructureType::TopLevel);
+}
+
+// Whether a query's ray breaks none of the rules validateRay and checkTopLevelHandle report, in a few compares and
+// without a message: vkasRayQueryInitialize asks it first and reports only for a ray that breaks one (issue 36).
+inline bool queryRayValid(VkAccelerationStructureKHR topLevel, const AccelerationStructure* tlas, uint32_t rayFlags,
+                          const float origin[3], float tMin, const float direction[3], float tMax) {
+    return (topLevel == VK_NULL_HANDLE || tlas != nullptr) && rayValueRules(origin, tMin, direction, tMax).all() &&
+           rayFlagRules(rayFlags).all() && (!tlas || builtTopLevel(*tlas));
 }
 
 // The ray-parameter rules of OpRayQueryInitializeKHR (and of the batch call): finite origin and direction, RayTmin

@@ -83,6 +83,7 @@ using PacketFn = bool (*)(const std::byte*, BlasResolver, const KernelRay*, uint
 struct Kernels {
     KernelFn single;
     PacketFn packet;
+    KernelFn query;
 };
 
 // AVX2 where the CPU has it, unless VKAS_TRACE_KERNEL=sse2 asks for the baseline (tests run both).
@@ -90,9 +91,10 @@ Kernels chooseKernels() {
 #if VKAS_KERNEL_AVX2
     const char* forced = std::getenv("VKAS_TRACE_KERNEL");
     const bool baselineOnly = forced && std::strcmp(forced, "sse2") == 0;
-    if (!baselineOnly && __builtin_cpu_supports("avx2")) return {avx2::traceWith, avx2::tracePacketWith};
+    if (!baselineOnly && __builtin_cpu_supports("avx2"))
+        return {avx2::traceWith, avx2::tracePacketWith, avx2::traceForQueryWith};
 #endif
-    return {baseline::traceWith, baseline::tracePacketWith};
+    return {baseline::traceWith, baseline::tracePacketWith, baseline::traceForQueryWith};
 }
 
 const Kernels& kernels() {
@@ -105,6 +107,11 @@ const Kernels& kernels() {
 bool traceKernel(const std::byte* topLevel, BlasResolver resolver, const KernelRay& ray, KernelScratch& scratch,
                  QueryHit& committed) {
     return kernels().single(topLevel, resolver, ray, scratch, committed);
+}
+
+bool traceKernelForQuery(const std::byte* topLevel, BlasResolver resolver, const KernelRay& ray, KernelScratch& scratch,
+                         QueryHit& committed) {
+    return kernels().query(topLevel, resolver, ray, scratch, committed);
 }
 
 bool tracePacket(const std::byte* topLevel, BlasResolver resolver, const KernelRay* rays, uint32_t count,

@@ -41,6 +41,13 @@ struct KernelScratch {
 bool traceKernel(const std::byte* topLevel, BlasResolver resolver, const KernelRay& ray, KernelScratch& scratch,
                  QueryHit& committed);
 
+// The ray query's first proceed (ray_query.cpp): traceKernel, except that it also returns false (committed
+// unspecified) where the ray meets a candidate the application must see: a non-opaque triangle (after the facing and
+// opacity rules and, for a fragment, its region) or an instance of AABBs the ray does not skip. Where it returns true,
+// `committed` is what the query's state machine would commit with the application seeing nothing: the query is done.
+bool traceKernelForQuery(const std::byte* topLevel, BlasResolver resolver, const KernelRay& ray, KernelScratch& scratch,
+                         QueryHit& committed);
+
 // Working memory of the packet kernel: its own stack (each entry with the rays it holds) and a single-ray scratch
 // for the rays that go on alone.
 struct PacketScratch {

@@ -6,13 +6,14 @@
 // Every function here has internal linkage, so the two copies never meet at link time.
 
 struct Walk {
-    ShearedRay worldRay, objectRay;
+    ShearedRay worldRay, objectRay;  // worldRay: the box part only (prepareBoxRay)
     float tMin, tMax;
     uint32_t flags, cullMask;
     const format::InstanceRecord* instance;
     QueryHit* committed;
     bool done;
     bool tied;  // (packets) a triangle was met at exactly the committed t: the order of the two decided the hit
+    bool needsQuery;  // (kForQuery) a candidate the application must see: the query's state machine takes the ray
 };
 
 // The triangle decision of the ray query (hit_rules.hpp) for each lane of a leaf that the four-lane test
@@ -20,7 +21,9 @@ struct Walk {
 // spot, as queryRunToCompletion does. Lanes are taken in order, so hits and ties are the ray query's. With
 // kFindTies (a ray of a packet, which meets the leaves in another order than it would alone), a triangle met at
 // exactly the committed t is noted in w.tied: the strict interval drops it, so the order decided between the two.
-template <bool kFindTies>
+// With kForQuery (a ray query's first proceed), a non-opaque candidate ends the walk with w.needsQuery: the
+// application decides it, so the query's state machine traces the ray instead.
+template <bool kFindTies, bool kForQuery = false>
 static inline void testTriangleLeaf(Walk& w, const std::byte* blas, format::ChildRef leafRef) {
     const format::ConstTriangleLeaf leaf =
         format::triangleLeaf(format::records(blas), format::leafFirst(leafRef), format::leafCount(leafRef));
@@ -41,6 +44,10 @@ static inline void testTriangleLeaf(Walk& w, const std::byte* blas, format::Chil
             if (!acceptTriangleHit(w.objectRay, w.tMin, w.tMax, w.flags, instanceFlags, leaf.flags(lane0 + lane),
                                    leafTriangleId(blas, leaf, lane0 + lane), c))
                 continue;
+            if (kForQuery && !c.opaque) {
+                w.needsQuery = w.done = true;
+                return;
+            }
             float v[3][3];
             leaf.positions(lane0 + lane, v);
             setTriangleHit(*w.committed, kCommittedTriangle, c, leaf.geometryIndex(lane0 + lane),
@@ -97,11 +104,11 @@ static inline void walkTree(Walk& w, const format::Node* nodes, const ShearedRay
 }
 
 // The leaves of a bottom level: its triangles.
-template <bool kFindTies>
+template <bool kFindTies, bool kForQuery = false>
 struct TriangleLeaves {
     Walk& w;
     const std::byte* blas;
-    void operator()(format::ChildRef leaf, uint32_t) const { testTriangleLeaf<kFindTies>(w, blas, leaf); }
+    void operator()(format::ChildRef leaf, uint32_t) const { testTriangleLeaf<kFindTies, kForQuery>(w, blas, leaf); }
 };
 
 // The bottom level an instance references, through the scratch's one-entry cache.
@@ -114,12 +121,16 @@ static inline const std::byte* resolveCached(KernelScratch& s, BlasResolver reso
 }
 
 // The bottom level of an instance the kernel can walk: its header, or null when the ray skips it (no tree, AABBs,
-// the Skip ray flags). Sets `supported` to false for what the kernel does not cover (motion, spheres, LSS).
+// the Skip ray flags). Sets `supported` to false for what the kernel does not cover (motion, spheres, LSS; for a
+// ray query, AABBs, whose candidates the application sees).
+template <bool kForQuery = false>
 static inline const format::Header* walkableBottomLevel(const std::byte* blas, uint32_t rayFlags, bool& supported) {
     const format::Header* h = traversableStructure(blas, format::StructureType::BottomLevel);
-    if (!h) return nullptr;
-    // AABB candidates are dropped without an intersection step: such an instance adds nothing.
-    if (h->primitiveType == VK_GEOMETRY_TYPE_AABBS_KHR || skippedByRayFlags(*h, rayFlags)) return nullptr;
+    if (!h || skippedByRayFlags(*h, rayFlags)) return nullptr;
+    if (h->primitiveType == VK_GEOMETRY_TYPE_AABBS_KHR) {
+        if (kForQuery) supported = false;  // (the batch drops AABB candidates without an intersection step)
+        return nullptr;
+    }
     if (h->primitiveType != VK_GEOMETRY_TYPE_TRIANGLES_KHR || motion::isMotionBuild(h->buildFlags)) {
         supported = false;
         return nullptr;
@@ -135,9 +146,9 @@ static inline void enterInstance(Walk& w, const format::InstanceRecord& inst) {
     w.instance = &inst;
 }
 
-// The leaves of the top level: instances, each entered as ray_query.cpp's enterInstance does (kFindTies: for a ray
-// of a packet, testTriangleLeaf).
-template <bool kFindTies>
+// The leaves of the top level: instances, each entered as ray_query.cpp's enterInstance does (kFindTies, kForQuery:
+// testTriangleLeaf's).
+template <bool kFindTies, bool kForQuery = false>
 struct InstanceLeaves {
     Walk& w;
     KernelScratch& s;
@@ -150,7 +161,7 @@ struct InstanceLeaves {
             const format::InstanceRecord& inst = instances[i];
             if (!instanceVisible(inst, w.cullMask)) continue;
             const std::byte* blas = resolveCached(s, resolver, inst.reference);
-            const format::Header* h = walkableBottomLevel(blas, w.flags, supported);
+            const format::Header* h = walkableBottomLevel<kForQuery>(blas, w.flags, supported);
             if (!supported) {
                 w.done = true;
                 return;
@@ -158,14 +169,14 @@ struct InstanceLeaves {
             if (!h) continue;
             enterInstance(w, inst);
             walkTree(w, format::nodes(blas), w.objectRay, h->root, s, sp,
-                     TriangleLeaves<kFindTies>{w, blas});
+                     TriangleLeaves<kFindTies, kForQuery>{w, blas});
             if (w.done) return;
         }
     }
 };
 
 static inline void startWalk(Walk& w, const KernelRay& ray, QueryHit& committed) {
-    prepareShearedRay(w.worldRay, ray.origin, ray.direction);
+    prepareBoxRay(w.worldRay, ray.origin, ray.direction);  // the top level's leaves are instances
     w.tMin = ray.tMin;
     w.tMax = ray.tMax;
     w.flags = ray.flags;
@@ -174,10 +185,13 @@ static inline void startWalk(Walk& w, const KernelRay& ray, QueryHit& committed)
     w.committed = &committed;
     w.done = false;
     w.tied = false;
+    w.needsQuery = false;
 }
 
-static bool traceWith(const std::byte* topLevel, BlasResolver resolver, const KernelRay& ray, KernelScratch& s,
-                      QueryHit& committed) {
+// kForQuery: for a ray query's first proceed (queryProceed): false also where a candidate needs the application.
+template <bool kForQuery>
+static bool traceRay(const std::byte* topLevel, BlasResolver resolver, const KernelRay& ray, KernelScratch& s,
+                     QueryHit& committed) {
     committed.type = kCommittedNone;  // the other fields are written with a hit
     committed.t = ray.tMax;
     const format::Header* top = traversableStructure(topLevel, format::StructureType::TopLevel);
@@ -187,6 +201,16 @@ static bool traceWith(const std::byte* topLevel, BlasResolver resolver, const Ke
     startWalk(w, ray, committed);
     bool supported = true;
     walkTree(w, format::nodes(topLevel), w.worldRay, top->root, s, 0,
-             InstanceLeaves<false>{w, s, resolver, format::instances(topLevel), supported});
-    return supported;
+             InstanceLeaves<false, kForQuery>{w, s, resolver, format::instances(topLevel), supported});
+    return supported && !w.needsQuery;
+}
+
+static bool traceWith(const std::byte* topLevel, BlasResolver resolver, const KernelRay& ray, KernelScratch& s,
+                      QueryHit& committed) {
+    return traceRay<false>(topLevel, resolver, ray, s, committed);
+}
+
+static bool traceForQueryWith(const std::byte* topLevel, BlasResolver resolver, const KernelRay& ray, KernelScratch& s,
+                              QueryHit& committed) {
+    return traceRay<true>(topLevel, resolver, ray, s, committed);
 }

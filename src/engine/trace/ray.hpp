@@ -42,13 +42,24 @@ constexpr OctantPlanes octantPlanes(uint32_t octant) {
 inline constexpr OctantPlanes kOctantPlanes[8] = {octantPlanes(0), octantPlanes(1), octantPlanes(2), octantPlanes(3),
                                                   octantPlanes(4), octantPlanes(5), octantPlanes(6), octantPlanes(7)};
 
-inline void prepareShearedRay(ShearedRay& r, const float org[3], const float dir[3]) {
+// The part of the set-up the node test reads (origin, direction, reciprocals, plane offsets): all a ray needs in a
+// top level, whose leaves are instances, not triangles. The shear fields are left unset.
+inline void prepareBoxRay(ShearedRay& r, const float org[3], const float dir[3]) {
     // Everything in locals first: `r` may alias `org` and `dir` for the compiler, which would reload them after
     // every store.
-    const float o0 = org[0], o1 = org[1], o2 = org[2], d[3] = {dir[0], dir[1], dir[2]};
-    const float i0 = 1.0f / d[0], i1 = 1.0f / d[1], i2 = 1.0f / d[2];
+    const float o0 = org[0], o1 = org[1], o2 = org[2], d0 = dir[0], d1 = dir[1], d2 = dir[2];
+    const float i0 = 1.0f / d0, i1 = 1.0f / d1, i2 = 1.0f / d2;
     // A negative reciprocal (dir < 0, or -0: invDir = -inf) enters a box through its upper plane.
-    const OctantPlanes& planes = kOctantPlanes[(i0 < 0.0f ? 1u : 0u) | (i1 < 0.0f ? 2u : 0u) | (i2 < 0.0f ? 4u : 0u)];
+    r.planes = kOctantPlanes[(i0 < 0.0f ? 1u : 0u) | (i1 < 0.0f ? 2u : 0u) | (i2 < 0.0f ? 4u : 0u)];
+    r.org[0] = o0, r.org[1] = o1, r.org[2] = o2;
+    r.dir[0] = d0, r.dir[1] = d1, r.dir[2] = d2;
+    r.invDir[0] = i0, r.invDir[1] = i1, r.invDir[2] = i2;
+}
+
+// The whole set-up: the box part and the shear of the watertight triangle test.
+inline void prepareShearedRay(ShearedRay& r, const float org[3], const float dir[3]) {
+    const float d[3] = {dir[0], dir[1], dir[2]};
+    prepareBoxRay(r, org, d);
     const int kz = dominantAxis(std::fabs(d[0]), std::fabs(d[1]), std::fabs(d[2]));
     static constexpr int kNext[3] = {1, 2, 0};
     int kx = kNext[kz], ky = kNext[kx];
@@ -57,13 +68,8 @@ inline void prepareShearedRay(ShearedRay& r, const float org[3], const float dir
         kx = ky;
         ky = t;
     }
-    const float sx = d[kx] / d[kz], sy = d[ky] / d[kz], sz = 1.0f / d[kz];
-    r.org[0] = o0, r.org[1] = o1, r.org[2] = o2;
-    r.dir[0] = d[0], r.dir[1] = d[1], r.dir[2] = d[2];
-    r.invDir[0] = i0, r.invDir[1] = i1, r.invDir[2] = i2;
-    r.planes = planes;
     r.kx = kx, r.ky = ky, r.kz = kz;
-    r.sx = sx, r.sy = sy, r.sz = sz;
+    r.sx = d[kx] / d[kz], r.sy = d[ky] / d[kz], r.sz = 1.0f / d[kz];
 }
 
 // The ray in an instance's object space: the 3x4 row-major world-to-object matrix applied in double, each result

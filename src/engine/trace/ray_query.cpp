@@ -6,6 +6,7 @@
 
 #include "engine/format/motion.hpp"
 #include "engine/trace/aabb_test.hpp"
+#include "engine/trace/batch_kernel.hpp"
 #include "engine/trace/hit_rules.hpp"
 #include "engine/trace/lss_test.hpp"
 #include "engine/trace/node_test_avx2.hpp"
@@ -275,6 +276,57 @@ bool visitSweptLeaf(RayQueryState& q) {
     return false;
 }
 
+// The whole ray in the batch kernel (batch_kernel.hpp), which gives the state machine's hits and ties, while no
+// candidate needs the application: true, with the committed hit set and the query done. False where the ray meets
+// one (a non-opaque triangle, AABBs) or a structure the kernel does not cover (motion, spheres, LSS): the state
+// machine then traces the ray from the start, as if the kernel had not run (nothing of the query was changed).
+// Not inlined: the kernel's stack (about 11 KiB) is on the C stack only during this call.
+[[gnu::noinline]] bool traceInKernel(RayQueryState& q) {
+    KernelScratch scratch;
+    scratch.cachedReference = 0;
+    scratch.cachedBlas = nullptr;
+    const KernelRay ray{{q.worldOrigin[0], q.worldOrigin[1], q.worldOrigin[2]},
+                        {q.worldDirection[0], q.worldDirection[1], q.worldDirection[2]},
+                        q.tMin,
+                        q.tMax,
+                        q.flags,
+                        q.cullMask};
+    QueryHit hit;
+    if (!traceKernelForQuery(q.topLevel, q.resolver, ray, scratch, hit)) return false;
+    if (hit.type != kCommittedNone) q.committed = hit;  // (without a hit, as queryInitialize left it)
+    q.tMax = hit.t;
+    q.done = true;
+    return true;
+}
+
+// Where the kernel declines a ray of a top level (non-opaque geometry, AABBs, motion), the next rays of it likely
+// meet the same, and each decline costs the kernel's walk up to that candidate before the state machine starts
+// over (about 7% of a query whose every candidate is non-opaque, docs/PERFORMANCE.md). So after a decline this
+// thread's next kSkipAfterDecline queries of that top level go straight to the state machine, then the kernel is
+// tried again. Only the speed depends on it: both paths give the same hits.
+constexpr uint32_t kSkipAfterDecline = 15;
+struct KernelDeclines {
+    const std::byte* topLevel = nullptr;
+    uint32_t skip = 0;
+};
+thread_local KernelDeclines declines;
+
+bool kernelMayTake(const RayQueryState& q) {
+    if (q.topLevel != declines.topLevel || declines.skip == 0) return true;
+    --declines.skip;
+    return false;
+}
+
+// VKAS_RAY_QUERY_KERNEL=off: every query runs in the state machine from its first proceed (the tests hold the
+// state machine to the batch kernel with it, tests/api/CMakeLists.txt). Read once.
+bool kernelForQueries() {
+    static const bool allowed = [] {
+        const char* v = std::getenv("VKAS_RAY_QUERY_KERNEL");
+        return !(v && std::strcmp(v, "off") == 0);
+    }();
+    return allowed;
+}
+
 }  // namespace
 
 void queryInitialize(RayQueryState& q, const std::byte* topLevel, BlasResolver resolver, uint32_t rayFlags,
@@ -291,6 +343,8 @@ void queryInitialize(RayQueryState& q, const std::byte* topLevel, BlasResolver r
     q.cullMask = cullMask;
     q.topLevel = topLevel;
     q.resolver = resolver;
+    q.firstProceed = kernelForQueries() ? RayQueryState::FirstProceed::TryKernel  // (the world ray is prepared there)
+                                        : RayQueryState::FirstProceed::Prepare;
     q.done = false;
     q.inBottomLevel = false;
     q.candidatePending = false;
@@ -306,7 +360,6 @@ void queryInitialize(RayQueryState& q, const std::byte* topLevel, BlasResolver r
     q.bottomLevelSwept = 0;
     resetHit(q.candidate, tMax);
     resetHit(q.committed, tMax);
-    prepareShearedRay(q.worldRay, origin, direction);
     const Header* h = traversableStructure(topLevel, StructureType::TopLevel);
     if (!h) {
         q.done = true;  // a null acceleration structure: every ray misses
@@ -318,6 +371,17 @@ void queryInitialize(RayQueryState& q, const std::byte* topLevel, BlasResolver r
 
 bool queryProceed(RayQueryState& q) {
     q.candidatePending = false;  // an unconfirmed candidate is dropped
+    // While every candidate is opaque the query runs as the batch does (issue 36): the state machine below only for
+    // a ray that meets one the application must see.
+    if (q.firstProceed != RayQueryState::FirstProceed::Done) {
+        const bool tryKernel = q.firstProceed == RayQueryState::FirstProceed::TryKernel;
+        q.firstProceed = RayQueryState::FirstProceed::Done;
+        if (tryKernel && !q.done && kernelMayTake(q)) {
+            if (traceInKernel(q)) return false;
+            declines = {q.topLevel, kSkipAfterDecline};
+        }
+        prepareBoxRay(q.worldRay, q.worldOrigin, q.worldDirection);  // the top level's leaves are instances
+    }
     while (!q.done) {
         if (q.inBottomLevel) {
             if (q.bottomLeafNext < q.bottomLeafEnd || q.leafLanes != 0) {

@@ -23,6 +23,12 @@ struct RayQueryState {
     BlasResolver resolver;
 
     // Where traversal stands.
+    enum class FirstProceed : uint8_t {
+        Done,       // traversal has started
+        TryKernel,  // the first proceed runs the ray in the batch kernel while no candidate needs the application
+        Prepare,    // the first proceed only prepares the world ray (queryWithoutKernel)
+    };
+    FirstProceed firstProceed;
     bool done;
     bool inBottomLevel;
     bool candidatePending;
@@ -36,7 +42,7 @@ struct RayQueryState {
     uint32_t bottomLeafCount;
     uint32_t leafLane0, leafLanes;
     FourLaneEdges leafEdges;
-    ShearedRay worldRay, objectRay;
+    ShearedRay worldRay, objectRay;  // worldRay: the box part only (prepareBoxRay)
     const format::InstanceRecord* instance;
     const std::byte* bottomLevel;
     bool bottomLevelAabbs;  // the current bottom-level structure holds AABBs, not triangles
@@ -57,6 +63,11 @@ void queryInitialize(RayQueryState& q, const std::byte* topLevel, BlasResolver r
                      uint32_t cullMask, const float origin[3], float tMin, const float direction[3], float tMax,
                      float time = 0.0f);
 bool queryProceed(RayQueryState& q);
+// After queryInitialize: the state machine traces the whole ray (for a caller that knows the kernel declines it, or
+// that must see AABB candidates).
+inline void queryWithoutKernel(RayQueryState& q) {
+    if (q.firstProceed == RayQueryState::FirstProceed::TryKernel) q.firstProceed = RayQueryState::FirstProceed::Prepare;
+}
 void queryConfirm(RayQueryState& q);
 // Commits the pending AABB candidate at tHit. Does nothing without one, or when tHit is outside
 // [tMin, committed t] (VUID 06353: the API layer reports it).
