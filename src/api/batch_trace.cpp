@@ -108,9 +108,10 @@ VkResult traceBatch(VkDevice device, VkAccelerationStructureKHR topLevel, VkasTr
         if (!v.failed()) {
             static const float origin[3] = {0, 0, 0}, direction[3] = {0, 0, 1};
             vkas::validateRay(v, tlas, rayFlags, origin, 0.0f, direction, 1.0f, "");
-            for (uint32_t i = 0; i < rayCount && v.failureCount() < 8; ++i) {
+            for (uint32_t i = 0; i < rayCount; ++i) {
                 const VkasRay& r = pRays[i];
-                if (vkas::rayValueRules(r.origin, r.tMin, r.direction, r.tMax).all()) continue;  // no message
+                if (vkas::rayValuesValid(r)) continue;  // no message
+                if (v.failureCount() >= 8) break;
                 char where[48];
                 std::snprintf(where, sizeof where, "pRays[%u]: ", i);
                 vkas::validateRay(v, nullptr, 0 /* the flags are checked once, above */, r.origin, r.tMin,

@@ -3,7 +3,10 @@
 // facing), ties between coincident triangles included, for every ray flag, instance flag, mask and build flag, and
 // for closest-hit and any-hit (TerminateOnFirstHit) mode. CTest runs this group twice: with the CPU's best kernel
 // and with VKAS_TRACE_KERNEL=sse2 (the baseline), so both instruction sets are held to the query.
+#include <iterator>
 #include <limits>
+
+#include "api/validate/ray.hpp"
 
 #include "meshes.hpp"
 
@@ -195,6 +198,37 @@ std::string batchParamName(const ::testing::TestParamInfo<BatchParam>& info) {
 }
 
 INSTANTIATE_TEST_SUITE_P(cpu, batch_trace, ::testing::ValuesIn(kBatchParams), batchParamName);
+
+// The quick checks of a ray (rayValuesValid: the batch's vector one, the query's scalar one) give rayValueRules'
+// verdict for every ray: each component
+// drawn from ordinary values, zeros of both signs, negatives, infinities, NaN and denormals.
+TEST(batch_trace_ray_rules, vector_check_equals_the_rules) {
+    const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
+    const float values[] = {0.0f, -0.0f, 1.0f, -1.0f, 2.5f, inf, -inf, nan, -nan,
+                            std::numeric_limits<float>::denorm_min(), -std::numeric_limits<float>::denorm_min(),
+                            std::numeric_limits<float>::max(), 1e-20f};
+    const uint64_t seed = vt::chooseSeed();
+    std::cout << "[   SEED   ] VKAS_TEST_SEED=" << seed << std::endl;
+    vt::Rng rng{seed};
+    uint64_t valid = 0;
+    for (int iter = 0; iter < 500000; ++iter) {
+        VkasRay r;
+        float* f = &r.origin[0];
+        for (int i = 0; i < 8; ++i) {
+            // Mostly valid values, so that every single broken component is met alone as well as together.
+            f[i] = rng.coin(0.8) ? rng.uniformf(0.0f, 10.0f) : values[rng.below(uint32_t(std::size(values)))];
+        }
+        const bool expected = vkas::rayValueRules(r.origin, r.tMin, r.direction, r.tMax).all();
+        ASSERT_EQ(vkas::rayValuesValid(r.origin, r.tMin, r.direction, r.tMax), expected)
+            << "iteration " << iter << " (the scalar check)";
+        ASSERT_EQ(vkas::rayValuesValid(r), expected)
+            << "iteration " << iter << ": origin " << r.origin[0] << " " << r.origin[1] << " " << r.origin[2]
+            << " tMin " << r.tMin << " direction " << r.direction[0] << " " << r.direction[1] << " "
+            << r.direction[2] << " tMax " << r.tMax;
+        valid += expected;
+    }
+    EXPECT_GT(valid, 1000u);  // both verdicts met
+}
 
 // A batch's ray rules (api/validate/ray.hpp): a valid ray is checked without a message being built (issue 36), an
 // invalid one is reported with its index, each broken rule once, at most 8 messages a call, and nothing is traced.

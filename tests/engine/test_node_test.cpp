@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <cstring>
+#include <iterator>
 #include <limits>
 
 #include "engine/trace/node_test_avx2.hpp"
@@ -146,6 +147,43 @@ TEST_F(NodeTest, avx2_lanes_equal_sse_lanes_bit_for_bit) {
         for (uint32_t i = 0; i < kNodeWidth; ++i)
             ASSERT_TRUE(sameBits(sse[i], avx[i])) << "iteration " << iter << " lane " << i << ": " << sse[i] << " vs "
                                                   << avx[i];
+    }
+#else
+    GTEST_SKIP() << "not an x86-64 build";
+#endif
+}
+
+// The instance transform in AVX (ray.hpp's transformRayAvx2, the batch kernel's) against transformRay bit for bit:
+// the same double operations in the same order, on matrices and rays from ordinary values to zeros of both signs,
+// infinities and NaN, so the object-space ray (and so every hit) is the same in both kernels and the query.
+TEST_F(NodeTest, avx2_instance_transform_equals_scalar_bit_for_bit) {
+#if defined(__x86_64__)
+    if (!__builtin_cpu_supports("avx2")) GTEST_SKIP() << "this CPU has no AVX2";
+    const float specials[] = {0.0f, -0.0f, 1.0f, -1.0f, kInf, -kInf, std::numeric_limits<float>::quiet_NaN(),
+                              std::numeric_limits<float>::denorm_min(), 3.4e38f, 1e-30f};
+    auto value = [&]() {
+        if (rng.coin(0.15)) return specials[rng.below(uint32_t(std::size(specials)))];
+        return coordinate();
+    };
+    for (int iter = 0; iter < 200000; ++iter) {
+        float m[3][4], o[3], d[3];
+        const bool identityLike = rng.coin(0.3);  // a rotation-free instance: zeros of both signs, ones
+        for (int r = 0; r < 3; ++r)
+            for (int c = 0; c < 4; ++c)
+                m[r][c] = identityLike ? (r == c ? 1.0f : (rng.coin(0.5) ? 0.0f : -0.0f)) : value();
+        for (int i = 0; i < 3; ++i) o[i] = value(), d[i] = value();
+        float so[3], sd[3], vo[3], vd[3];
+        vkas::transformRay(m, o, d, so, sd);
+        vkas::transformRayAvx2(m, o, d, vo, vd);
+        // Any NaN equals any NaN: which operand's NaN a sum passes on (its sign) is the compiler's choice for the
+        // scalar code too, and no decision of a traversal reads a NaN's sign (every comparison with it is false).
+        auto same = [](float a, float b) { return (std::isnan(a) && std::isnan(b)) || sameBits(a, b); };
+        for (int i = 0; i < 3; ++i) {
+            ASSERT_TRUE(same(so[i], vo[i])) << "iteration " << iter << " origin " << i << ": " << so[i] << " vs "
+                                                << vo[i];
+            ASSERT_TRUE(same(sd[i], vd[i])) << "iteration " << iter << " direction " << i << ": " << sd[i]
+                                                << " vs " << vd[i];
+        }
     }
 #else
     GTEST_SKIP() << "not an x86-64 build";

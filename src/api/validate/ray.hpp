@@ -5,7 +5,12 @@
 #include <vulkan/vulkan_core.h>
 
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
+
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 #include "api/objects.hpp"
 #include "api/validate/validator.hpp"
@@ -27,6 +32,34 @@ inline RayValueRules rayValueRules(const float origin[3], float tMin, const floa
     auto finite3 = [](const float* p) { return std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]); };
     return {finite3(origin), finite3(direction), !std::isnan(tMin) && !std::isnan(tMax),
             !(tMin < 0.0f) && !(tMax < 0.0f), !(tMin > tMax)};
+}
+
+// rayValueRules(...).all() for one ray of a batch in a few vector compares (a valid ray's whole cost, issue 36's
+// 2% budget): origin and direction components finite (|x| < inf, NaN fails), tMin and tMax at least 0 (NaN fails),
+// tMin at most tMax. The same verdict as all(): a ray it refuses goes to validateRay, which names the broken rules.
+inline bool rayValuesValid(const VkasRay& r) {
+#if defined(__SSE2__)
+    static_assert(offsetof(VkasRay, tMin) == 12 && offsetof(VkasRay, direction) == 16 && offsetof(VkasRay, tMax) == 28,
+                  "VkasRay is two rows of four floats: origin, tMin; direction, tMax");
+    const __m128 a = _mm_loadu_ps(r.origin), b = _mm_loadu_ps(r.direction);  // (origin, tMin), (direction, tMax)
+    const __m128 abs = _mm_castsi128_ps(_mm_set1_epi32(0x7FFFFFFF)), inf = _mm_set1_ps(INFINITY);
+    const __m128 zero = _mm_setzero_ps();
+    const int finite =
+        _mm_movemask_ps(_mm_and_ps(_mm_cmplt_ps(_mm_and_ps(a, abs), inf), _mm_cmplt_ps(_mm_and_ps(b, abs), inf)));
+    const int nonNegative = _mm_movemask_ps(_mm_and_ps(_mm_cmpge_ps(a, zero), _mm_cmpge_ps(b, zero)));
+    return (finite & 7) == 7 && (nonNegative & 8) != 0 && r.tMin <= r.tMax;
+#else
+    return rayValueRules(r.origin, r.tMin, r.direction, r.tMax).all();
+#endif
+}
+
+// The same verdict for a ray given as its parts (vkasRayQueryInitialize's arguments), in a few scalar operations:
+// x * 0 is NaN exactly where x is infinite or NaN (and +-0 otherwise), so one sum tells whether all six components
+// are finite; the comparisons with 0 and between tMin and tMax fail for NaN.
+inline bool rayValuesValid(const float origin[3], float tMin, const float direction[3], float tMax) {
+    const float zeroIfFinite = ((origin[0] * 0.0f + origin[1] * 0.0f) + (origin[2] * 0.0f + direction[0] * 0.0f)) +
+                               (direction[1] * 0.0f + direction[2] * 0.0f);
+    return zeroIfFinite == 0.0f && tMin >= 0.0f && tMax >= 0.0f && tMin <= tMax;
 }
 
 // The ray-flag rules, each written once: at most one of Opaque, NoOpaque, CullOpaque and CullNoOpaque (06891), at
@@ -57,7 +90,7 @@ inline bool builtTopLevel(const AccelerationStructure& tlas) {
 // without a message: vkasRayQueryInitialize asks it first and reports only for a ray that breaks one (issue 36).
 inline bool queryRayValid(VkAccelerationStructureKHR topLevel, const AccelerationStructure* tlas, uint32_t rayFlags,
                           const float origin[3], float tMin, const float direction[3], float tMax) {
-    return (topLevel == VK_NULL_HANDLE || tlas != nullptr) && rayValueRules(origin, tMin, direction, tMax).all() &&
+    return (topLevel == VK_NULL_HANDLE || tlas != nullptr) && rayValuesValid(origin, tMin, direction, tMax) &&
            rayFlagRules(rayFlags).all() && (!tlas || builtTopLevel(*tlas));
 }
 

@@ -29,9 +29,14 @@ using format::ChildRef;
 
 // The baseline kernel: the node test the ray query uses (SSE2, 4 lanes twice), and the packet tests in SSE2.
 namespace baseline {
-inline uint32_t childEntries(const format::Node& node, const ShearedRay& r, float tMin, float tMax,
+// The node test reads the prepared ray through this reference (prepareNodeRay: once per structure walked).
+struct NodeRay {
+    const ShearedRay* r;
+};
+inline NodeRay prepareNodeRay(const ShearedRay& r) { return {&r}; }
+inline uint32_t childEntries(const format::Node& node, const NodeRay& r, float tMin, float tMax,
                              float out[format::kNodeWidth]) {
-    return childEntryDistances(node, r, tMin, tMax, out);
+    return childEntryDistances(node, *r.r, tMin, tMax, out);
 }
 inline uint32_t groupEntries(const format::Node& node, const PacketFrustum& f, float tMax,
                              float entry[format::kNodeWidth]) {
@@ -40,6 +45,9 @@ inline uint32_t groupEntries(const format::Node& node, const PacketFrustum& f, f
 inline uint32_t lanesEntering(const format::Node& node, uint32_t slot, const PacketFrustum& f, const PacketLanes& L,
                               const float* tMin, const float* tMax, uint32_t lanes) {
     return lanesEnteringChild(node, slot, f, L, tMin, tMax, lanes);
+}
+inline void transformInstanceRay(const float (*m)[4], const float o[3], const float d[3], float oo[3], float od[3]) {
+    transformRay(m, o, d, oo, od);
 }
 #include "engine/trace/batch_kernel_body.hpp"
 #include "engine/trace/packet_kernel_body.hpp"
@@ -55,7 +63,10 @@ inline uint32_t lanesEntering(const format::Node& node, uint32_t slot, const Pac
 #pragma GCC target("avx2")
 #endif
 namespace avx2 {
-inline uint32_t childEntries(const format::Node& node, const ShearedRay& r, float tMin, float tMax,
+// The ray broadcast once per structure walked (prepareNodeRay), kept in registers by the walk.
+using NodeRay = NodeRayAvx2;
+inline NodeRay prepareNodeRay(const ShearedRay& r) { return nodeRayAvx2(r); }
+inline uint32_t childEntries(const format::Node& node, const NodeRay& r, float tMin, float tMax,
                              float out[format::kNodeWidth]) {
     return childEntryDistancesAvx2(node, r, tMin, tMax, out);
 }
@@ -66,6 +77,9 @@ inline uint32_t groupEntries(const format::Node& node, const PacketFrustum& f, f
 inline uint32_t lanesEntering(const format::Node& node, uint32_t slot, const PacketFrustum& f, const PacketLanes& L,
                               const float* tMin, const float* tMax, uint32_t lanes) {
     return lanesEnteringChildAvx2(node, slot, f, L, tMin, tMax, lanes);
+}
+inline void transformInstanceRay(const float (*m)[4], const float o[3], const float d[3], float oo[3], float od[3]) {
+    transformRayAvx2(m, o, d, oo, od);
 }
 #include "engine/trace/batch_kernel_body.hpp"
 #include "engine/trace/packet_kernel_body.hpp"

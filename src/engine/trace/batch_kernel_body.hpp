@@ -1,7 +1,8 @@
 // The body of the batch traversal kernel (batch_kernel.hpp), included by batch_kernel.cpp once per instruction set
 // (no include guard, on purpose):
 // for SSE2 and, inside a target("avx2") region, for AVX2. It includes nothing: everything it calls is either defined
-// in the enclosing namespace before the include (childEntries: the node test of that instruction set) or an inline
+// in the enclosing namespace before the include (childEntries: the node test of that instruction set;
+// transformInstanceRay: the world-to-object transform) or an inline
 // function of a header included before (compiled for the baseline target, which an AVX2 function may inline).
 // Every function here has internal linkage, so the two copies never meet at link time.
 
@@ -41,6 +42,9 @@ static inline void testTriangleLeaf(Walk& w, const std::byte* blas, format::Chil
                   w.committed->trianglePrimitiveIndex == leaf.primitiveIndex()[lane0 + lane] &&
                   w.committed->triangleGeometryIndex == leaf.geometryIndex(lane0 + lane)))
                 w.tied = true;
+            // acceptTriangleHit's first rule, asked here first: most candidates of a closest-hit walk lie past the
+            // committed hit, and the call (with the triangle's identity gathered for it) is then not made.
+            if (!(c.hit.t > w.tMin && c.hit.t < w.tMax)) continue;
             if (!acceptTriangleHit(w.objectRay, w.tMin, w.tMax, w.flags, instanceFlags, leaf.flags(lane0 + lane),
                                    leafTriangleId(blas, leaf, lane0 + lane), c))
                 continue;
@@ -62,7 +66,7 @@ static inline void testTriangleLeaf(Walk& w, const std::byte* blas, format::Chil
 }
 
 // The children of `node` the ray enters, in the order of traversal_steps.hpp (the nearest last). Returns their number.
-static inline uint32_t hitChildren(const format::Node& node, const ShearedRay& r, float tMin, float tMax,
+static inline uint32_t hitChildren(const format::Node& node, const NodeRay& r, float tMin, float tMax,
                                    format::ChildRef ref[format::kNodeWidth], float dist[format::kNodeWidth]) {
     float entry[format::kNodeWidth];
     return orderHitChildren(node, childEntries(node, r, tMin, tMax, entry), entry, ref, dist);
@@ -74,16 +78,21 @@ static inline uint32_t hitChildren(const format::Node& node, const ShearedRay& r
 template <typename LeafFn>
 static inline void walkTree(Walk& w, const format::Node* nodes, const ShearedRay& r, format::ChildRef root,
                             KernelScratch& s, uint32_t base, const LeafFn& leafFn) {
+    // The ray and its interval in locals (registers): the stack's stores could alias them for the compiler, which
+    // would reload them at every node. Only a leaf changes tMax.
+    const NodeRay nodeRay = prepareNodeRay(r);
+    const float tMin = w.tMin;
+    float tMax = w.tMax;
     uint32_t sp = base;
-    pushChild(s.stackRef, s.stackDist, sp, root, w.tMin);
+    pushChild(s.stackRef, s.stackDist, sp, root, tMin);
     while (sp > base) {
         --sp;
         format::ChildRef ref = s.stackRef[sp];
-        if (s.stackDist[sp] > w.tMax * kFarSlack) continue;  // behind the committed hit
+        if (s.stackDist[sp] > tMax * kFarSlack) continue;  // behind the committed hit
         while (format::isInternal(ref)) {
             format::ChildRef refs[format::kNodeWidth];
             float dist[format::kNodeWidth];
-            const uint32_t hits = hitChildren(nodes[format::nodeIndex(ref)], r, w.tMin, w.tMax, refs, dist);
+            const uint32_t hits = hitChildren(nodes[format::nodeIndex(ref)], nodeRay, tMin, tMax, refs, dist);
             if (hits == 0) {
                 ref = format::kEmptyRef;
                 break;
@@ -99,6 +108,7 @@ static inline void walkTree(Walk& w, const format::Node* nodes, const ShearedRay
         if (format::isLeaf(ref)) {
             leafFn(ref, sp);
             if (w.done) return;
+            tMax = w.tMax;
         }
     }
 }
@@ -141,7 +151,7 @@ static inline const format::Header* walkableBottomLevel(const std::byte* blas, u
 // The ray in the object space of `inst`, as ray_query.cpp's enterInstance does.
 static inline void enterInstance(Walk& w, const format::InstanceRecord& inst) {
     float oo[3], od[3];
-    transformRay(inst.worldToObject, w.worldRay.org, w.worldRay.dir, oo, od);
+    transformInstanceRay(inst.worldToObject, w.worldRay.org, w.worldRay.dir, oo, od);
     prepareShearedRay(w.objectRay, oo, od);
     w.instance = &inst;
 }
@@ -175,8 +185,10 @@ struct InstanceLeaves {
     }
 };
 
+// The world ray's origin and direction only: the box part (prepareBoxRay) is prepared where the top level has a node
+// to test (its leaves are instances, whose rays are prepared in object space).
 static inline void startWalk(Walk& w, const KernelRay& ray, QueryHit& committed) {
-    prepareBoxRay(w.worldRay, ray.origin, ray.direction);  // the top level's leaves are instances
+    for (int i = 0; i < 3; ++i) w.worldRay.org[i] = ray.origin[i], w.worldRay.dir[i] = ray.direction[i];
     w.tMin = ray.tMin;
     w.tMax = ray.tMax;
     w.flags = ray.flags;
@@ -200,8 +212,15 @@ static bool traceRay(const std::byte* topLevel, BlasResolver resolver, const Ker
     Walk w;
     startWalk(w, ray, committed);
     bool supported = true;
-    walkTree(w, format::nodes(topLevel), w.worldRay, top->root, s, 0,
-             InstanceLeaves<false, kForQuery>{w, s, resolver, format::instances(topLevel), supported});
+    const InstanceLeaves<false, kForQuery> leaves{w, s, resolver, format::instances(topLevel), supported};
+    if (format::isLeaf(top->root)) {
+        // A top level of one leaf (a few instances, the usual scene of one mesh): its instances are entered at once,
+        // as walkTree would after pushing and popping the root (whose distance, tMin, it compares with tMax).
+        if (!(w.tMin > w.tMax * kFarSlack)) leaves(top->root, 0);
+    } else {
+        prepareBoxRay(w.worldRay, ray.origin, ray.direction);
+        walkTree(w, format::nodes(topLevel), w.worldRay, top->root, s, 0, leaves);
+    }
     return supported && !w.needsQuery;
 }
 

@@ -186,6 +186,7 @@ static bool tracePacketWith(const std::byte* topLevel, BlasResolver resolver, co
     p.overBudget = false;
     for (uint32_t l = 0; l < count; ++l) {
         startWalk(p.ray[l], rays[l], hits[l]);
+        prepareBoxRay(p.ray[l].worldRay, rays[l].origin, rays[l].direction);  // the packet walks the top level
         p.tMin[l] = rays[l].tMin;
         // One packet shares the batch's flags and mask; terminate-on-first-hit rays keep the first hit they meet,
         // which depends on the order, so they never come here.

@@ -5,6 +5,10 @@
 #include <cmath>
 #include <cstdint>
 
+#if defined(__x86_64__)
+#include <immintrin.h>
+#endif
+
 namespace vkas {
 
 // The plane offsets of ShearedRay for each octant of the direction (bit i: invDir[i] < 0, the ray enters a box
@@ -84,5 +88,28 @@ inline void transformRay(const float (*m)[4], const float o[3], const float d[3]
     }
     for (int r = 0; r < 3; ++r) oo[r] = ro[r], od[r] = rd[r];
 }
+
+#if defined(__x86_64__)
+// transformRay in AVX: the same double operations in the same order, on the matrix's columns, so that the three
+// rows are computed at once (each product of two floats is exact in double; the sums keep the scalar order
+// ((m0 o0 + m1 o1) + m2 o2) + m3): the results are transformRay's bits. Callable only where the CPU has AVX2.
+__attribute__((target("avx2"))) inline void transformRayAvx2(const float (*m)[4], const float o[3], const float d[3],
+                                                             float oo[3], float od[3]) {
+    __m128 c0 = _mm_loadu_ps(m[0]), c1 = _mm_loadu_ps(m[1]), c2 = _mm_loadu_ps(m[2]), c3 = _mm_setzero_ps();
+    _MM_TRANSPOSE4_PS(c0, c1, c2, c3);  // c_j = (m[0][j], m[1][j], m[2][j], 0)
+    const __m256d m0 = _mm256_cvtps_pd(c0), m1 = _mm256_cvtps_pd(c1), m2 = _mm256_cvtps_pd(c2),
+                  m3 = _mm256_cvtps_pd(c3);
+    const __m256d o0 = _mm256_set1_pd(o[0]), o1 = _mm256_set1_pd(o[1]), o2 = _mm256_set1_pd(o[2]);
+    const __m256d d0 = _mm256_set1_pd(d[0]), d1 = _mm256_set1_pd(d[1]), d2 = _mm256_set1_pd(d[2]);
+    const __m256d ro = _mm256_add_pd(
+        _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(m0, o0), _mm256_mul_pd(m1, o1)), _mm256_mul_pd(m2, o2)), m3);
+    const __m256d rd =
+        _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(m0, d0), _mm256_mul_pd(m1, d1)), _mm256_mul_pd(m2, d2));
+    alignas(16) float fo[4], fd[4];
+    _mm_store_ps(fo, _mm256_cvtpd_ps(ro));
+    _mm_store_ps(fd, _mm256_cvtpd_ps(rd));
+    for (int r = 0; r < 3; ++r) oo[r] = fo[r], od[r] = fd[r];
+}
+#endif
 
 }  // namespace vkas

@@ -291,10 +291,13 @@ bool visitSweptLeaf(RayQueryState& q) {
                         q.tMax,
                         q.flags,
                         q.cullMask};
-    QueryHit hit;
-    if (!traceKernelForQuery(q.topLevel, q.resolver, ray, scratch, hit)) return false;
-    if (hit.type != kCommittedNone) q.committed = hit;  // (without a hit, as queryInitialize left it)
-    q.tMax = hit.t;
+    // The kernel commits straight into the query (a miss leaves it as queryInitialize did: type none, t = tMax); a
+    // declined ray may have committed an opaque hit on its way, which the state machine, starting over, must not see.
+    if (!traceKernelForQuery(q.topLevel, q.resolver, ray, scratch, q.committed)) {
+        resetHit(q.committed, q.tMax);
+        return false;
+    }
+    q.tMax = q.committed.t;
     q.done = true;
     return true;
 }

@@ -12,6 +12,7 @@
 //   - lanes with edge functions of both strict signs are missed, as intersectTriangle would decide.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 
 #include "engine/format/layout.hpp"
@@ -39,17 +40,22 @@ struct FourLaneEdges {
                         FourLaneEdges& e) {
     const uint32_t live = (1u << count) - 1u;
 #if defined(__SSE2__)
-    auto row = [&](uint32_t vertex, int axis) { return _mm_loadu_ps(leaf.row(3 * vertex + uint32_t(axis)) + lane0); };
+    // Row 3 * vertex + axis starts at row(0) + (3 * vertex + axis) * n: one pointer per sheared axis and the
+    // vertex stride, so the nine loads are addressing modes, not nine products of the ray's axes and the leaf size.
+    const size_t n = leaf.n, vertexStride = 3 * n;
+    const float* first = leaf.row(0) + lane0;
+    const float *px = first + size_t(r.kx) * n, *py = first + size_t(r.ky) * n, *pz = first + size_t(r.kz) * n;
+    auto row = [&](uint32_t vertex, const float* axisRow) { return _mm_loadu_ps(axisRow + vertex * vertexStride); };
     const __m128 ox = _mm_set1_ps(r.org[r.kx]), oy = _mm_set1_ps(r.org[r.ky]), oz = _mm_set1_ps(r.org[r.kz]);
     const __m128 sx = _mm_set1_ps(r.sx), sy = _mm_set1_ps(r.sy);
-    const __m128 Az0 = _mm_sub_ps(row(0, r.kz), oz), Bz0 = _mm_sub_ps(row(1, r.kz), oz),
-                 Cz0 = _mm_sub_ps(row(2, r.kz), oz);
-    const __m128 Ax = _mm_sub_ps(_mm_sub_ps(row(0, r.kx), ox), _mm_mul_ps(sx, Az0));
-    const __m128 Ay = _mm_sub_ps(_mm_sub_ps(row(0, r.ky), oy), _mm_mul_ps(sy, Az0));
-    const __m128 Bx = _mm_sub_ps(_mm_sub_ps(row(1, r.kx), ox), _mm_mul_ps(sx, Bz0));
-    const __m128 By = _mm_sub_ps(_mm_sub_ps(row(1, r.ky), oy), _mm_mul_ps(sy, Bz0));
-    const __m128 Cx = _mm_sub_ps(_mm_sub_ps(row(2, r.kx), ox), _mm_mul_ps(sx, Cz0));
-    const __m128 Cy = _mm_sub_ps(_mm_sub_ps(row(2, r.ky), oy), _mm_mul_ps(sy, Cz0));
+    const __m128 Az0 = _mm_sub_ps(row(0, pz), oz), Bz0 = _mm_sub_ps(row(1, pz), oz),
+                 Cz0 = _mm_sub_ps(row(2, pz), oz);
+    const __m128 Ax = _mm_sub_ps(_mm_sub_ps(row(0, px), ox), _mm_mul_ps(sx, Az0));
+    const __m128 Ay = _mm_sub_ps(_mm_sub_ps(row(0, py), oy), _mm_mul_ps(sy, Az0));
+    const __m128 Bx = _mm_sub_ps(_mm_sub_ps(row(1, px), ox), _mm_mul_ps(sx, Bz0));
+    const __m128 By = _mm_sub_ps(_mm_sub_ps(row(1, py), oy), _mm_mul_ps(sy, Bz0));
+    const __m128 Cx = _mm_sub_ps(_mm_sub_ps(row(2, px), ox), _mm_mul_ps(sx, Cz0));
+    const __m128 Cy = _mm_sub_ps(_mm_sub_ps(row(2, py), oy), _mm_mul_ps(sy, Cz0));
     const __m128 U = _mm_sub_ps(_mm_mul_ps(Cx, By), _mm_mul_ps(Cy, Bx));
     const __m128 V = _mm_sub_ps(_mm_mul_ps(Ax, Cy), _mm_mul_ps(Ay, Cx));
     const __m128 W = _mm_sub_ps(_mm_mul_ps(Bx, Ay), _mm_mul_ps(By, Ax));
