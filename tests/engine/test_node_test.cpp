@@ -4,10 +4,13 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdlib>
 #include <cstring>
 #include <iterator>
 #include <limits>
+#include <string>
 
+#include "engine/trace/instruction_set.hpp"
 #include "engine/trace/node_test_avx2.hpp"
 #include "engine/trace/node_test_sse.hpp"
 #include "engine/trace/ray.hpp"
@@ -151,6 +154,23 @@ TEST_F(NodeTest, avx2_lanes_equal_sse_lanes_bit_for_bit) {
 #else
     GTEST_SKIP() << "not an x86-64 build";
 #endif
+}
+
+// The instruction-set registry (trace/instruction_set.hpp) that every trace kernel asks: the best the CPU has, or
+// the baseline where VKAS_TRACE_KERNEL=sse2 (CTest runs this group both ways).
+TEST(InstructionSet, follows_the_cpu_and_the_environment) {
+    const char* forced = std::getenv("VKAS_TRACE_KERNEL");
+    const bool baseline = forced && std::string(forced) == "sse2";
+#if defined(__x86_64__)
+    const bool avx2 = __builtin_cpu_supports("avx2");
+#else
+    const bool avx2 = false;
+#endif
+    const vkas::TraceInstructionSet expected =
+        (!baseline && avx2) ? vkas::TraceInstructionSet::Avx2 : vkas::TraceInstructionSet::Sse2;
+    EXPECT_EQ(vkas::traceInstructionSet(), expected);
+    EXPECT_EQ(vkas::traceInstructionSet(), expected);  // read once: the same answer
+    std::cout << "trace kernels: " << vkas::instructionSetName(vkas::traceInstructionSet()) << std::endl;
 }
 
 // The instance transform in AVX (ray.hpp's transformRayAvx2, the batch kernel's) against transformRay bit for bit:

@@ -3,11 +3,10 @@
 #include <vulkan/vulkan_core.h>
 
 #include <cmath>
-#include <cstdlib>
-#include <cstring>
 
 #include "engine/format/motion.hpp"
 #include "engine/trace/hit_rules.hpp"
+#include "engine/trace/instruction_set.hpp"
 #include "engine/trace/node_test_avx2.hpp"
 #include "engine/trace/node_test_sse.hpp"
 #include "engine/trace/packet_tests.hpp"
@@ -100,12 +99,10 @@ struct Kernels {
     KernelFn query;
 };
 
-// AVX2 where the CPU has it, unless VKAS_TRACE_KERNEL=sse2 asks for the baseline (tests run both).
+// The copy of the instruction set the registry names (instruction_set.hpp).
 Kernels chooseKernels() {
 #if VKAS_KERNEL_AVX2
-    const char* forced = std::getenv("VKAS_TRACE_KERNEL");
-    const bool baselineOnly = forced && std::strcmp(forced, "sse2") == 0;
-    if (!baselineOnly && __builtin_cpu_supports("avx2"))
+    if (traceInstructionSet() == TraceInstructionSet::Avx2)
         return {avx2::traceWith, avx2::tracePacketWith, avx2::traceForQueryWith};
 #endif
     return {baseline::traceWith, baseline::tracePacketWith, baseline::traceForQueryWith};

@@ -8,6 +8,7 @@
 #include "engine/trace/aabb_test.hpp"
 #include "engine/trace/batch_kernel.hpp"
 #include "engine/trace/hit_rules.hpp"
+#include "engine/trace/instruction_set.hpp"
 #include "engine/trace/lss_test.hpp"
 #include "engine/trace/node_test_avx2.hpp"
 #include "engine/trace/node_test_sse.hpp"
@@ -61,11 +62,10 @@ inline uint32_t nodeTest(const Node& n, const ShearedRay& r, float tMin, float t
 #endif
 #endif
 
-// The AVX2 node test where the CPU has it, unless VKAS_TRACE_KERNEL=sse2 asks for the baseline (as for the batch).
+// The node test of the instruction set the registry names (instruction_set.hpp), as the batch kernel takes its.
 DescendFn chooseDescend() {
 #if VKAS_NODE_TEST_AVX2
-    const char* forced = std::getenv("VKAS_TRACE_KERNEL");
-    if (!(forced && std::strcmp(forced, "sse2") == 0) && __builtin_cpu_supports("avx2")) return avx2::descend;
+    if (traceInstructionSet() == TraceInstructionSet::Avx2) return avx2::descend;
 #endif
     return baseline::descend;
 }
