@@ -1,6 +1,5 @@
 // vkasTraceRays: many rays, each traced as a ray query run to completion would trace it, spread over the worker
 // threads.
-#include <chrono>
 #include <cstdio>
 #include <cstring>
 #include <memory>
@@ -11,12 +10,11 @@
 #include "api/validate/ray.hpp"
 #include "api/validate/validator.hpp"
 #include "engine/trace/batch_kernel.hpp"
+#include "engine/trace/batch_schedule.hpp"
 #include "engine/trace/packet_gather.hpp"
 #include "engine/trace/ray_query.hpp"
 
 namespace {
-
-constexpr uint32_t kRaysPerTask = vkas::kMaxGather;  // each task gathers its rays into packets
 
 void writeHit(const vkas::QueryHit& h, VkasHit& out) {
     out.type = h.type;
@@ -125,34 +123,20 @@ VkResult traceBatch(VkDevice device, VkAccelerationStructureKHR topLevel, VkasTr
     // outright; the flag only ever removes candidates that would be dropped anyway.
     const uint32_t flags = rayFlags | (intersect ? 0u : VKAS_RAY_FLAG_SKIP_AABBS) |
                            (mode == VKAS_TRACE_MODE_ANY_HIT ? VKAS_RAY_FLAG_TERMINATE_ON_FIRST_HIT : 0u);
-    const uint64_t tasks = (uint64_t(rayCount) + kRaysPerTask - 1) / kRaysPerTask;
-    const vkas::PacketPolicy packets = intersect ? vkas::PacketPolicy::Off : vkas::packetPolicy();
-    vkas::PacketChooser chooser(packets);
-    const float originTolerance =
-        block ? vkas::packetOriginTolerance(vkas::format::header(block)->bounds) : 0.0f;
+    const uint64_t tasks = (uint64_t(rayCount) + vkas::kRaysPerTask - 1) / vkas::kRaysPerTask;
+    // Without an intersection callback the engine's schedule (engine/trace/batch_schedule.hpp) traces the rays with
+    // the batch kernels, coherent closest-hit rays as packets; a ray they do not cover (motion, spheres, LSS) and
+    // every ray of vkasTraceRaysProcedural run as ray queries here. All give the same hits.
+    vkas::BatchSchedule schedule(block, vkas::resolveAccelerationStructure,
+                                 intersect ? vkas::PacketPolicy::Off : vkas::packetPolicy());
     dev->workers().parallelFor(tasks, [&](uint64_t task) {
-        // Without an intersection callback the batch kernel traces the rays, coherent closest-hit rays as packets;
-        // a ray it does not cover (motion, spheres, LSS) and every ray of vkasTraceRaysProcedural run as ray
-        // queries. All give the same hits.
         // 11 KiB and more: kept off small worker stacks, in the command's host memory (the pool's workers run with it).
         vkas::HostUnique<vkas::PacketScratch> scratch;
         vkas::HostUnique<vkas::RayQueryState> q;
-        if (!intersect) scratch = vkas::makeHostUniqueForOverwrite<vkas::PacketScratch>();
-        const uint64_t first = task * kRaysPerTask;
-        const uint32_t n = uint32_t(std::min<uint64_t>(rayCount, first + kRaysPerTask) - first);
-        vkas::KernelRay rays[kRaysPerTask];
-        for (uint32_t k = 0; k < n; ++k) {
-            const VkasRay& r = pRays[first + k];
-            rays[k] = {{r.origin[0], r.origin[1], r.origin[2]}, {r.direction[0], r.direction[1], r.direction[2]},
-                       r.tMin, r.tMax, flags, cullMask};
-        }
-        auto traceAlone = [&](uint32_t k) {
+        const uint64_t first = task * vkas::kRaysPerTask;
+        const uint32_t n = uint32_t(std::min<uint64_t>(rayCount, first + vkas::kRaysPerTask) - first);
+        auto traceAsQuery = [&](uint32_t k) {
             const uint64_t i = first + k;
-            vkas::QueryHit hit;
-            if (scratch && vkas::traceKernel(block, vkas::resolveAccelerationStructure, rays[k], scratch->single, hit)) {
-                writeHit(hit, pHits[i]);
-                return;
-            }
             const VkasRay& r = pRays[i];
             if (!q) q = vkas::makeHostUnique<vkas::RayQueryState>();
             vkas::queryInitialize(*q, block, vkas::resolveAccelerationStructure, flags, cullMask, r.origin, r.tMin,
@@ -161,42 +145,20 @@ VkResult traceBatch(VkDevice device, VkAccelerationStructureKHR topLevel, VkasTr
             runQuery(*q, uint32_t(i), intersect, userData);
             writeHit(q->committed, pHits[i]);
         };
-        const vkas::PacketChooser::Choice choice = chooser.choice();
-        if (choice == vkas::PacketChooser::Choice::Alone) {
-            for (uint32_t k = 0; k < n; ++k) traceAlone(k);
+        if (intersect) {
+            for (uint32_t k = 0; k < n; ++k) traceAsQuery(k);
             return;
         }
-        uint32_t order[kRaysPerTask], groupSize[kRaysPerTask];
-        const uint32_t groups = vkas::gatherPackets(rays, n, packets, originTolerance, order, groupSize);
-        if (choice == vkas::PacketChooser::Choice::Sample) chooser.recordGather(n - groups);  // > 0: a packet formed
-        bool packetsPay = true;  // until a packet gives up: then this task's other rays go alone
-        for (uint32_t g = 0, k = 0; g < groups; k += groupSize[g++]) {
-            const bool coherent = groupSize[g] > 1 && packetsPay;
-            const bool timed = coherent && choice == vkas::PacketChooser::Choice::Sample;
-            const bool packet = coherent && (!timed || chooser.nextSampleIsPacket());
-            const auto start = timed ? std::chrono::steady_clock::now() : std::chrono::steady_clock::time_point{};
-            if (packet) {
-                vkas::KernelRay packetRays[vkas::kPacketWidth];
-                vkas::QueryHit hits[vkas::kPacketWidth];
-                for (uint32_t l = 0; l < groupSize[g]; ++l) packetRays[l] = rays[order[k + l]];
-                uint32_t tied = 0;
-                packetsPay = vkas::tracePacket(block, vkas::resolveAccelerationStructure, packetRays, groupSize[g],
-                                               *scratch, hits, tied);
-                for (uint32_t l = 0; l < groupSize[g]; ++l) {
-                    if (packetsPay && !((tied >> l) & 1u))
-                        writeHit(hits[l], pHits[first + order[k + l]]);
-                    else
-                        traceAlone(order[k + l]);  // a tie the packet's order decided, or rays it cannot take
-                }
-            } else {
-                for (uint32_t l = 0; l < groupSize[g]; ++l) traceAlone(order[k + l]);
-            }
-            if (timed && packetsPay) {
-                const auto nanos = std::chrono::duration_cast<std::chrono::nanoseconds>(
-                    std::chrono::steady_clock::now() - start);
-                chooser.record(packet, uint64_t(nanos.count()), groupSize[g]);
-            }
+        scratch = vkas::makeHostUniqueForOverwrite<vkas::PacketScratch>();
+        vkas::KernelRay rays[vkas::kRaysPerTask];
+        for (uint32_t k = 0; k < n; ++k) {
+            const VkasRay& r = pRays[first + k];
+            rays[k] = {{r.origin[0], r.origin[1], r.origin[2]}, {r.direction[0], r.direction[1], r.direction[2]},
+                       r.tMin, r.tMax, flags, cullMask};
         }
+        vkas::traceBatchTask(
+            schedule, rays, n, *scratch,
+            [&](uint32_t k, const vkas::QueryHit& hit) { writeHit(hit, pHits[first + k]); }, traceAsQuery);
     });
     return VK_SUCCESS;
 }
