@@ -46,11 +46,6 @@ const vkas::AccelerationStructure* liveStructure(VkAccelerationStructureKHR hand
     return as;
 }
 
-bool builtWithMotion(const vkas::AccelerationStructure* as) {
-    const std::byte* block = as ? as->block() : nullptr;
-    return block && vkas::format::header(block)->magic == vkas::format::kMagic &&
-           (vkas::format::header(block)->buildFlags & VK_BUILD_ACCELERATION_STRUCTURE_MOTION_BIT_NV);
-}
 static_assert(sizeof(QueryObject) <= VKAS_RAY_QUERY_SIZE, "VKAS_RAY_QUERY_SIZE is too small");
 static_assert(alignof(QueryObject) <= 16);
 
@@ -82,7 +77,9 @@ VKAS_API void vkasRayQueryInitialize(VkasRayQuery* q, VkAccelerationStructureKHR
     vkas::queryInitialize(state(q), block, vkas::resolveAccelerationStructure, rayFlags, cullMask,
                           valid ? origin : zero, valid ? tMin : 0.0f, valid ? direction : zero, valid ? tMax : 0.0f);
     object(q).device = tlas ? tlas->device : nullptr;
-    object(q).motion = builtWithMotion(tlas);
+    // queryInitialize read the structure's header: built with motion (a query that traverses nothing, a null or
+    // empty structure or an invalid ray, never has a candidate for GenerateIntersection to reject).
+    object(q).motion = state(q).topLevelMotion;
 }
 
 // [NV-motion] vkasRayQueryInitialize with a ray time. The time rule is the one of OpTraceRayMotionNV (SPIR-V has
@@ -109,7 +106,9 @@ VKAS_API void vkasRayQueryInitializeMotion(VkasRayQuery* q, VkAccelerationStruct
                           valid ? origin : zero, valid ? tMin : 0.0f, valid ? direction : zero, valid ? tMax : 0.0f,
                           valid ? time : 0.0f);
     object(q).device = tlas ? tlas->device : nullptr;
-    object(q).motion = builtWithMotion(tlas);
+    // queryInitialize read the structure's header: built with motion (a query that traverses nothing, a null or
+    // empty structure or an invalid ray, never has a candidate for GenerateIntersection to reject).
+    object(q).motion = state(q).topLevelMotion;
 }
 
 VKAS_API VkBool32 vkasRayQueryProceed(VkasRayQuery* q) { return vkas::queryProceed(state(q)) ? VK_TRUE : VK_FALSE; }
