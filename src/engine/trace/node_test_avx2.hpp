@@ -5,6 +5,7 @@
 #pragma once
 
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
 
 #include "engine/format/layout.hpp"
@@ -21,7 +22,7 @@ namespace vkas {
 // reciprocals broadcast to all lanes, and the plane offsets of its octant. A walk keeps it in registers.
 struct NodeRayAvx2 {
     __m256 ox, oy, oz, ix, iy, iz;
-    uint32_t nearX, farX, nearY, farY, nearZ, farZ;
+    size_t nearX, farX, nearY, farY, nearZ, farZ;  // (pointer-sized: added to a node address as they are)
 };
 
 __attribute__((target("avx2"))) inline NodeRayAvx2 nodeRayAvx2(const ShearedRay& r) {
