@@ -54,6 +54,13 @@ RayQueryState& state(VkasRayQuery* q) { return object(q).engine; }
 const RayQueryState& state(const VkasRayQuery* q) {
     return reinterpret_cast<const QueryObject*>(q->opaque)->engine;
 }
+// After queryInitialize: the device of the query's structure, and whether it was built with motion (queryInitialize
+// read the header; a query that traverses nothing, a null or empty structure or an invalid ray, never has a candidate
+// for GenerateIntersection to reject).
+void recordStructure(VkasRayQuery* q, const vkas::AccelerationStructure* tlas) {
+    object(q).device = tlas ? tlas->device : nullptr;
+    object(q).motion = state(q).topLevelMotion;
+}
 const QueryHit& hit(const VkasRayQuery* q, VkBool32 committed) {
     return committed ? state(q).committed : state(q).candidate;
 }
@@ -76,10 +83,7 @@ VKAS_API void vkasRayQueryInitialize(VkasRayQuery* q, VkAccelerationStructureKHR
     static const float zero[3] = {0, 0, 0};
     vkas::queryInitialize(state(q), block, vkas::resolveAccelerationStructure, rayFlags, cullMask,
                           valid ? origin : zero, valid ? tMin : 0.0f, valid ? direction : zero, valid ? tMax : 0.0f);
-    object(q).device = tlas ? tlas->device : nullptr;
-    // queryInitialize read the structure's header: built with motion (a query that traverses nothing, a null or
-    // empty structure or an invalid ray, never has a candidate for GenerateIntersection to reject).
-    object(q).motion = state(q).topLevelMotion;
+    recordStructure(q, tlas);
 }
 
 // [NV-motion] vkasRayQueryInitialize with a ray time. The time rule is the one of OpTraceRayMotionNV (SPIR-V has
@@ -105,10 +109,7 @@ VKAS_API void vkasRayQueryInitializeMotion(VkasRayQuery* q, VkAccelerationStruct
     vkas::queryInitialize(state(q), block, vkas::resolveAccelerationStructure, rayFlags, cullMask,
                           valid ? origin : zero, valid ? tMin : 0.0f, valid ? direction : zero, valid ? tMax : 0.0f,
                           valid ? time : 0.0f);
-    object(q).device = tlas ? tlas->device : nullptr;
-    // queryInitialize read the structure's header: built with motion (a query that traverses nothing, a null or
-    // empty structure or an invalid ray, never has a candidate for GenerateIntersection to reject).
-    object(q).motion = state(q).topLevelMotion;
+    recordStructure(q, tlas);
 }
 
 VKAS_API VkBool32 vkasRayQueryProceed(VkasRayQuery* q) { return vkas::queryProceed(state(q)) ? VK_TRUE : VK_FALSE; }

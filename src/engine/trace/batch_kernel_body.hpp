@@ -44,7 +44,7 @@ static inline void testTriangleLeaf(Walk& w, const std::byte* blas, format::Chil
                 w.tied = true;
             // acceptTriangleHit's first rule, asked here first: most candidates of a closest-hit walk lie past the
             // committed hit, and the call (with the triangle's identity gathered for it) is then not made.
-            if (!(c.hit.t > w.tMin && c.hit.t < w.tMax)) continue;
+            if (!insideTriangleInterval(c.hit.t, w.tMin, w.tMax)) continue;
             if (!acceptTriangleHit(w.objectRay, w.tMin, w.tMax, w.flags, instanceFlags, leaf.flags(lane0 + lane),
                                    leafTriangleId(blas, leaf, lane0 + lane), c))
                 continue;

@@ -140,11 +140,15 @@ inline bool geometryOpacity(uint32_t recordFlags, uint32_t instanceFlags, uint32
     return true;
 }
 
+// The t interval of a triangle candidate: exclusive at both ends. The batch kernel asks it before acceptTriangleHit
+// too, so that a candidate past the committed hit costs no call.
+inline bool insideTriangleInterval(float t, float tMin, float tMax) { return t > tMin && t < tMax; }
+
 // What follows the intersection: the t interval (exclusive for triangles), the facing culls (unless the instance
 // disables culling) and opacity, for a triangle with record flags `recordFlags` that the ray covers at `out.hit`.
 inline bool acceptTriangleHit(const ShearedRay& r, float tMin, float tMax, uint32_t rayFlags, uint32_t instanceFlags,
                               uint32_t recordFlags, const TriangleId& id, TriangleCandidate& out) {
-    if (!(out.hit.t > tMin && out.hit.t < tMax)) return false;  // strict for triangles
+    if (!insideTriangleInterval(out.hit.t, tMin, tMax)) return false;
     bool front = out.hit.frontFace;
     if (instanceFlags & kInstanceFlipFacing) front = !front;
     if (!(instanceFlags & kInstanceCullDisable)) {
