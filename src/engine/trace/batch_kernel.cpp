@@ -8,6 +8,7 @@
 #include "engine/trace/hit_rules.hpp"
 #include "engine/trace/instruction_set.hpp"
 #include "engine/trace/node_test_avx2.hpp"
+#include "engine/trace/node_test_avx512.hpp"
 #include "engine/trace/node_test_sse.hpp"
 #include "engine/trace/packet_tests.hpp"
 #include "engine/trace/ray.hpp"
@@ -18,6 +19,7 @@
 #if defined(__x86_64__)
 #include <immintrin.h>
 #define VKAS_KERNEL_AVX2 (VKAS_NODE_TEST_AVX2 && VKAS_PACKET_TESTS_AVX2)
+#define VKAS_KERNEL_AVX512 (VKAS_KERNEL_AVX2 && VKAS_NODE_TEST_AVX512)
 #endif
 
 namespace vkas {
@@ -90,44 +92,69 @@ inline void transformInstanceRay(const float (*m)[4], const float o[3], const fl
 #endif
 #endif
 
-using KernelFn = bool (*)(const std::byte*, BlasResolver, const KernelRay&, KernelScratch&, QueryHit&);
-using PacketFn = bool (*)(const std::byte*, BlasResolver, const KernelRay*, uint32_t, PacketScratch&, QueryHit*,
-                          uint32_t&);
-struct Kernels {
-    KernelFn single;
-    PacketFn packet;
-    KernelFn query;
-};
+#if VKAS_KERNEL_AVX512
+// The AVX-512 kernel: the same body compiled for AVX-512F/VL (no FMA, as above), with the node test whose
+// comparisons land in mask registers (node_test_avx512.hpp); the packet tests and the instance transform are the
+// AVX2 ones, which already fill a 256-bit register per step.
+#if defined(__clang__)
+#pragma clang attribute push(__attribute__((target("avx2,avx512f,avx512vl"))), apply_to = function)
+#else
+#pragma GCC push_options
+#pragma GCC target("avx2,avx512f,avx512vl")
+#endif
+namespace avx512 {
+using NodeRay = NodeRayAvx2;
+using avx2::groupEntries;
+using avx2::lanesEntering;
+using avx2::prepareNodeRay;
+using avx2::transformInstanceRay;
+inline uint32_t childEntries(const format::Node& node, const NodeRay& r, float tMin, float tMax,
+                             float out[format::kNodeWidth]) {
+    return childEntryDistancesAvx512(node, r, tMin, tMax, out);
+}
+#include "engine/trace/batch_kernel_body.hpp"
+#include "engine/trace/packet_kernel_body.hpp"
+}  // namespace avx512
+#if defined(__clang__)
+#pragma clang attribute pop
+#else
+#pragma GCC pop_options
+#endif
+#endif
 
 // The copy of the instruction set the registry names (instruction_set.hpp).
-Kernels chooseKernels() {
+TraceKernels chooseKernels() {
+#if VKAS_KERNEL_AVX512
+    if (traceInstructionSet() == TraceInstructionSet::Avx512)
+        return {avx512::traceWith, avx512::tracePacketWith, avx512::traceForQueryWith};
+#endif
 #if VKAS_KERNEL_AVX2
-    if (traceInstructionSet() == TraceInstructionSet::Avx2)
+    if (traceInstructionSet() >= TraceInstructionSet::Avx2)
         return {avx2::traceWith, avx2::tracePacketWith, avx2::traceForQueryWith};
 #endif
     return {baseline::traceWith, baseline::tracePacketWith, baseline::traceForQueryWith};
 }
 
-const Kernels& kernels() {
-    static const Kernels chosen = chooseKernels();
+}  // namespace
+
+const TraceKernels& traceKernels() {
+    static const TraceKernels chosen = chooseKernels();
     return chosen;
 }
 
-}  // namespace
-
 bool traceKernel(const std::byte* topLevel, BlasResolver resolver, const KernelRay& ray, KernelScratch& scratch,
                  QueryHit& committed) {
-    return kernels().single(topLevel, resolver, ray, scratch, committed);
+    return traceKernels().single(topLevel, resolver, ray, scratch, committed);
 }
 
 bool traceKernelForQuery(const std::byte* topLevel, BlasResolver resolver, const KernelRay& ray, KernelScratch& scratch,
                          QueryHit& committed) {
-    return kernels().query(topLevel, resolver, ray, scratch, committed);
+    return traceKernels().forQuery(topLevel, resolver, ray, scratch, committed);
 }
 
 bool tracePacket(const std::byte* topLevel, BlasResolver resolver, const KernelRay* rays, uint32_t count,
                  PacketScratch& scratch, QueryHit* hits, uint32_t& tied) {
-    return kernels().packet(topLevel, resolver, rays, count, scratch, hits, tied);
+    return traceKernels().packet(topLevel, resolver, rays, count, scratch, hits, tied);
 }
 
 }  // namespace vkas

@@ -69,4 +69,14 @@ struct PacketScratch {
 bool tracePacket(const std::byte* topLevel, BlasResolver resolver, const KernelRay* rays, uint32_t count,
                  PacketScratch& scratch, QueryHit* hits, uint32_t& tied);
 
+// The three kernels above in the copy of the instruction set the registry names (instruction_set.hpp), for a caller
+// that traces many rays: taken once per call (batch_schedule.hpp), they are called directly, without the registry's
+// check and a forwarding call for each ray.
+struct TraceKernels {
+    bool (*single)(const std::byte*, BlasResolver, const KernelRay&, KernelScratch&, QueryHit&);
+    bool (*packet)(const std::byte*, BlasResolver, const KernelRay*, uint32_t, PacketScratch&, QueryHit*, uint32_t&);
+    bool (*forQuery)(const std::byte*, BlasResolver, const KernelRay&, KernelScratch&, QueryHit&);
+};
+const TraceKernels& traceKernels();
+
 }  // namespace vkas

@@ -1,10 +1,10 @@
 // The body of the batch traversal kernel (batch_kernel.hpp), included by batch_kernel.cpp once per instruction set
 // (no include guard, on purpose):
-// for SSE2 and, inside a target("avx2") region, for AVX2. It includes nothing: everything it calls is either defined
+// for SSE2 and, inside target("avx2") and target("avx2,avx512f,avx512vl") regions, for AVX2 and AVX-512. It includes nothing: everything it calls is either defined
 // in the enclosing namespace before the include (childEntries: the node test of that instruction set;
 // transformInstanceRay: the world-to-object transform) or an inline
 // function of a header included before (compiled for the baseline target, which an AVX2 function may inline).
-// Every function here has internal linkage, so the two copies never meet at link time.
+// Every function here has internal linkage, so the copies never meet at link time.
 
 struct Walk {
     ShearedRay worldRay, objectRay;  // worldRay: the box part only (prepareBoxRay)

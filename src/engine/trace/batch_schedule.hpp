@@ -22,6 +22,7 @@ constexpr uint32_t kRaysPerTask = kMaxGather;
 struct BatchSchedule {
     const std::byte* topLevel;  // a valid top-level block, or null: every ray misses
     BlasResolver resolver;
+    const TraceKernels kernels;  // the registry's copy, asked once per call
     PacketPolicy packets;
     float originTolerance;  // packetOriginTolerance of the top level's bounds
     PacketChooser chooser;
@@ -29,6 +30,7 @@ struct BatchSchedule {
     BatchSchedule(const std::byte* topLevel_, BlasResolver resolver_, PacketPolicy packets_)
         : topLevel(topLevel_),
           resolver(resolver_),
+          kernels(traceKernels()),
           packets(packets_),
           originTolerance(topLevel_ ? packetOriginTolerance(format::header(topLevel_)->bounds) : 0.0f),
           chooser(packets_) {}
@@ -42,7 +44,7 @@ void traceBatchTask(BatchSchedule& s, const KernelRay* rays, uint32_t n, PacketS
                     const OnDeclined& onDeclined) {
     auto traceAlone = [&](uint32_t k) {
         QueryHit hit;
-        if (traceKernel(s.topLevel, s.resolver, rays[k], scratch.single, hit))
+        if (s.kernels.single(s.topLevel, s.resolver, rays[k], scratch.single, hit))
             onHit(k, hit);
         else
             onDeclined(k);
@@ -66,7 +68,7 @@ void traceBatchTask(BatchSchedule& s, const KernelRay* rays, uint32_t n, PacketS
             QueryHit hits[kPacketWidth];
             for (uint32_t l = 0; l < groupSize[g]; ++l) packetRays[l] = rays[order[k + l]];
             uint32_t tied = 0;
-            packetsPay = tracePacket(s.topLevel, s.resolver, packetRays, groupSize[g], scratch, hits, tied);
+            packetsPay = s.kernels.packet(s.topLevel, s.resolver, packetRays, groupSize[g], scratch, hits, tied);
             for (uint32_t l = 0; l < groupSize[g]; ++l) {
                 if (packetsPay && !((tied >> l) & 1u))
                     onHit(order[k + l], hits[l]);

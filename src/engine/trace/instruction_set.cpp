@@ -2,23 +2,28 @@
 
 #include <cstdlib>
 #include <cstring>
+#include <initializer_list>
 
 namespace vkas {
 
 namespace {
 
-bool cpuHasAvx2() {
+// The best set this CPU (and its operating system: libgcc's probe checks the saved register state) can run.
+TraceInstructionSet cpuInstructionSet() {
 #if defined(__x86_64__)
-    return __builtin_cpu_supports("avx2");
-#else
-    return false;
+    if (__builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl")) return TraceInstructionSet::Avx512;
+    if (__builtin_cpu_supports("avx2")) return TraceInstructionSet::Avx2;
 #endif
+    return TraceInstructionSet::Sse2;
 }
 
 TraceInstructionSet chooseInstructionSet() {
+    const TraceInstructionSet best = cpuInstructionSet();
     const char* forced = std::getenv("VKAS_TRACE_KERNEL");
-    if (forced && std::strcmp(forced, "sse2") == 0) return TraceInstructionSet::Sse2;
-    return cpuHasAvx2() ? TraceInstructionSet::Avx2 : TraceInstructionSet::Sse2;
+    if (!forced) return best;
+    for (TraceInstructionSet set : {TraceInstructionSet::Sse2, TraceInstructionSet::Avx2})
+        if (std::strcmp(forced, instructionSetName(set)) == 0 && set < best) return set;
+    return best;
 }
 
 }  // namespace
@@ -30,6 +35,7 @@ TraceInstructionSet traceInstructionSet() {
 
 const char* instructionSetName(TraceInstructionSet set) {
     switch (set) {
+        case TraceInstructionSet::Avx512: return "avx512";
         case TraceInstructionSet::Avx2: return "avx2";
         case TraceInstructionSet::Sse2: break;
     }

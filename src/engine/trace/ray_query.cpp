@@ -11,6 +11,7 @@
 #include "engine/trace/instruction_set.hpp"
 #include "engine/trace/lss_test.hpp"
 #include "engine/trace/node_test_avx2.hpp"
+#include "engine/trace/node_test_avx512.hpp"
 #include "engine/trace/node_test_sse.hpp"
 #include "engine/trace/sphere_test.hpp"
 #include "engine/trace/traversal_steps.hpp"
@@ -62,10 +63,33 @@ inline uint32_t nodeTest(const Node& n, const ShearedRay& r, float tMin, float t
 #endif
 #endif
 
+#if VKAS_NODE_TEST_AVX512
+#if defined(__clang__)
+#pragma clang attribute push(__attribute__((target("avx2,avx512f,avx512vl"))), apply_to = function)
+#else
+#pragma GCC push_options
+#pragma GCC target("avx2,avx512f,avx512vl")
+#endif
+namespace avx512 {
+inline uint32_t nodeTest(const Node& n, const ShearedRay& r, float tMin, float tMax, float* out) {
+    return childEntryDistancesAvx512(n, r, tMin, tMax, out);
+}
+#include "engine/trace/ray_query_descent.hpp"
+}  // namespace avx512
+#if defined(__clang__)
+#pragma clang attribute pop
+#else
+#pragma GCC pop_options
+#endif
+#endif
+
 // The node test of the instruction set the registry names (instruction_set.hpp), as the batch kernel takes its.
 DescendFn chooseDescend() {
+#if VKAS_NODE_TEST_AVX512
+    if (traceInstructionSet() == TraceInstructionSet::Avx512) return avx512::descend;
+#endif
 #if VKAS_NODE_TEST_AVX2
-    if (traceInstructionSet() == TraceInstructionSet::Avx2) return avx2::descend;
+    if (traceInstructionSet() >= TraceInstructionSet::Avx2) return avx2::descend;
 #endif
     return baseline::descend;
 }
