@@ -42,24 +42,30 @@ void unitDirection(const KernelRay& r, float out[3]) {
 
 constexpr float kDirectionSpread = 0.05f;  // unit directions of one packet within this on every axis: ~3 degrees
 
-// Whether rays order[0, n) are coherent enough for one packet: unit directions within kDirectionSpread of each
-// other on every axis and origins within originTolerance.
-bool coherent(const KernelRay* rays, const Gathered& g, const uint32_t* order, uint32_t n, float originTolerance) {
+// How many of rays order[0, n) from the first on are coherent enough for one packet: unit directions within
+// kDirectionSpread of each other on every axis and origins within originTolerance. The run grows ray by ray (one
+// look at each ray), so a gather costs the same whatever packets it forms; a window tested whole and moved on by
+// one ray where it failed cost up to kPacketWidth looks a ray (issue 36: 445 instructions a gathered camera ray).
+uint32_t coherentRun(const KernelRay* rays, const Gathered& g, const uint32_t* order, uint32_t n,
+                     float originTolerance) {
     float dLo[3], dHi[3], oLo[3], oHi[3];
     for (int a = 0; a < 3; ++a) {
         dLo[a] = dHi[a] = g.unit[order[0]][a];
         oLo[a] = oHi[a] = rays[order[0]].origin[a];
     }
     for (uint32_t k = 1; k < n; ++k) {
+        float nLo[3], nHi[3], mLo[3], mHi[3];
+        bool fits = true;
         for (int a = 0; a < 3; ++a) {
             const float d = g.unit[order[k]][a], o = rays[order[k]].origin[a];
-            dLo[a] = d < dLo[a] ? d : dLo[a], dHi[a] = d > dHi[a] ? d : dHi[a];
-            oLo[a] = o < oLo[a] ? o : oLo[a], oHi[a] = o > oHi[a] ? o : oHi[a];
+            nLo[a] = d < dLo[a] ? d : dLo[a], nHi[a] = d > dHi[a] ? d : dHi[a];
+            mLo[a] = o < oLo[a] ? o : oLo[a], mHi[a] = o > oHi[a] ? o : oHi[a];
+            fits = fits && nHi[a] - nLo[a] <= kDirectionSpread && mHi[a] - mLo[a] <= originTolerance;
         }
+        if (!fits) return k;
+        for (int a = 0; a < 3; ++a) dLo[a] = nLo[a], dHi[a] = nHi[a], oLo[a] = mLo[a], oHi[a] = mHi[a];
     }
-    for (int a = 0; a < 3; ++a)
-        if (!(dHi[a] - dLo[a] <= kDirectionSpread) || !(oHi[a] - oLo[a] <= originTolerance)) return false;
-    return true;
+    return n;
 }
 
 // Whether neighbours in the batch are mostly coherent (an image's rays) or mostly not (bounces, shadow rays to
@@ -126,9 +132,10 @@ uint32_t gatherPackets(const KernelRay* rays, uint32_t count, PacketPolicy polic
         const uint32_t begin = start[key], end = start[key + 1];
         for (uint32_t k = begin; k < end;) {
             uint32_t n = end - k < kPacketWidth ? end - k : kPacketWidth;
-            if (key == kAlone || n < 2 ||
-                (policy == PacketPolicy::Coherent && !coherent(rays, g, order + k, n, originTolerance)))
+            if (key == kAlone)
                 n = 1;
+            else if (policy == PacketPolicy::Coherent && n > 1)
+                n = coherentRun(rays, g, order + k, n, originTolerance);  // 1: this ray goes alone
             groupSize[groups++] = n;
             k += n;
         }

@@ -1,7 +1,7 @@
 // Which rays of a batch are traced together as packets (batch_kernel.hpp, tracePacket): closest-hit rays are
-// gathered by octant and dominant axis of their directions, in their order within the batch, and each run of up
-// to kPacketWidth rays of one group becomes a packet when the rays are coherent (nearly parallel, from nearly one
-// origin: a camera's rays, not diffuse bounces, whose packet would admit almost every child). The rest are traced
+// gathered by octant and dominant axis of their directions, in their order within the batch, and within a group
+// each longest run of coherent rays (nearly parallel, from nearly one origin: a camera's rays, not diffuse bounces,
+// whose packet would admit almost every child), up to kPacketWidth, becomes a packet. The rest are traced
 // one by one, and a batch whose neighbouring rays are mostly not coherent is not gathered at all.
 #pragma once
 
