@@ -36,8 +36,12 @@ void push(RayQueryState& q, ChildRef ref, float dist) { pushChild(q.stackRef, q.
 using DescendFn = ChildRef (*)(RayQueryState&, const Node*, ChildRef, const ShearedRay&);
 
 // The walk down from a popped node (ray_query_descent.hpp), once per instruction set as the batch kernel is built.
+// Each defines the node ray (the ray as its node test reads it, prepared once per descent: a descent's pushes could
+// alias the query's ray for the compiler, which would prepare it again at every node) and the node test.
 namespace baseline {
-inline uint32_t nodeTest(const Node& n, const ShearedRay& r, float tMin, float tMax, float* out) {
+using NodeRay = const ShearedRay&;
+inline NodeRay prepareNodeRay(const ShearedRay& r) { return r; }
+inline uint32_t nodeTest(const Node& n, NodeRay r, float tMin, float tMax, float* out) {
     return childEntryDistances(n, r, tMin, tMax, out);
 }
 #include "engine/trace/ray_query_descent.hpp"
@@ -51,7 +55,9 @@ inline uint32_t nodeTest(const Node& n, const ShearedRay& r, float tMin, float t
 #pragma GCC target("avx2")
 #endif
 namespace avx2 {
-inline uint32_t nodeTest(const Node& n, const ShearedRay& r, float tMin, float tMax, float* out) {
+using NodeRay = NodeRayAvx2;
+inline NodeRay prepareNodeRay(const ShearedRay& r) { return nodeRayAvx2(r); }
+inline uint32_t nodeTest(const Node& n, const NodeRay& r, float tMin, float tMax, float* out) {
     return childEntryDistancesAvx2(n, r, tMin, tMax, out);
 }
 #include "engine/trace/ray_query_descent.hpp"
@@ -71,7 +77,9 @@ inline uint32_t nodeTest(const Node& n, const ShearedRay& r, float tMin, float t
 #pragma GCC target("avx2,avx512f,avx512vl")
 #endif
 namespace avx512 {
-inline uint32_t nodeTest(const Node& n, const ShearedRay& r, float tMin, float tMax, float* out) {
+using NodeRay = NodeRayAvx2;
+using avx2::prepareNodeRay;
+inline uint32_t nodeTest(const Node& n, const NodeRay& r, float tMin, float tMax, float* out) {
     return childEntryDistancesAvx512(n, r, tMin, tMax, out);
 }
 #include "engine/trace/ray_query_descent.hpp"

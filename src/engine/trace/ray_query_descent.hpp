@@ -1,13 +1,14 @@
 // The ray query's walk down the tree from a popped node (ray_query.cpp), included there once per instruction set
-// (no include guard, on purpose), in a namespace that defines nodeTest: the SSE2 node test or the AVX2 one
-// (node_test_sse.hpp, node_test_avx2.hpp), which give identical results, so the query visits what the batch kernel
-// visits either way.
+// (no include guard, on purpose), in a namespace that defines NodeRay, prepareNodeRay and nodeTest: the SSE2, AVX2 or
+// AVX-512 node test (node_test_sse.hpp, node_test_avx2.hpp, node_test_avx512.hpp), which give identical results, so
+// the query visits what the batch kernel visits either way.
 //
 // At each node the hit children are pushed, farthest first, except the nearest, which is entered at once: the same as
 // pushing it last and popping it next (its entry distance passed the box test with the current tMax, so the pop's
 // test would pass too; the batch kernel's walkTree does the same). Returns the leaf reached, or kEmptyRef when a node
 // has no hit child.
-inline ChildRef descend(RayQueryState& q, const Node* nodes, ChildRef ref, const ShearedRay& r) {
+inline ChildRef descend(RayQueryState& q, const Node* nodes, ChildRef ref, const ShearedRay& ray) {
+    const NodeRay r = prepareNodeRay(ray);
     while (isInternal(ref)) {
         const Node& node = nodes[nodeIndex(ref)];
         float entry[kNodeWidth];
