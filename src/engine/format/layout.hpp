@@ -155,8 +155,15 @@ struct TriangleLeafView {
     uint32_t geometryIndex(uint32_t lane) const { return geometryAndFlags()[lane] & kGeometryIndexMask; }
     uint32_t flags(uint32_t lane) const { return geometryAndFlags()[lane] >> kGeometryIndexBits; }
     void positions(uint32_t lane, float v[3][3]) const {
-        for (uint32_t k = 0; k < 3; ++k)
-            for (uint32_t a = 0; a < 3; ++a) v[k][a] = row(3 * k + a)[lane];
+        // Row r + 1 lies n floats past row r: one pointer stepped by the leaf size (a hit's positions are read for
+        // every committed hit; nine products of row and leaf size cost more than the loads).
+        const auto* p = row(0) + lane;
+        const size_t stride = n;
+        v[0][0] = p[0], v[0][1] = p[stride], v[0][2] = p[2 * stride];
+        p += 3 * stride;
+        v[1][0] = p[0], v[1][1] = p[stride], v[1][2] = p[2 * stride];
+        p += 3 * stride;
+        v[2][0] = p[0], v[2][1] = p[stride], v[2][2] = p[2 * stride];
     }
     // Writers (mutable leaves): a lane's positions, or the whole lane from a gathered (or format-1) record.
     void setPositions(uint32_t lane, const float (*v)[3]) const {
