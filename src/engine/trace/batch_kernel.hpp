@@ -36,7 +36,8 @@ struct KernelScratch {
 };
 
 // Traces `ray` through `topLevel` (a valid top-level block, or null: every ray misses) into `committed` (a
-// QueryHit as queryRunToCompletion leaves RayQueryState::committed; without a hit only type and t are written). Returns false, with `committed` unspecified,
+// QueryHit as queryRunToCompletion leaves RayQueryState::committed, in the fields a batch reports: hit_rules.hpp,
+// setReportedTriangleHit; without a hit only type and t are written). Returns false, with `committed` unspecified,
 // when the ray meets something the kernel does not handle (a motion top level, motion triangles, spheres, LSS).
 bool traceKernel(const std::byte* topLevel, BlasResolver resolver, const KernelRay& ray, KernelScratch& scratch,
                  QueryHit& committed);
@@ -44,7 +45,8 @@ bool traceKernel(const std::byte* topLevel, BlasResolver resolver, const KernelR
 // The ray query's first proceed (ray_query.cpp): traceKernel, except that it also returns false (committed
 // unspecified) where the ray meets a candidate the application must see: a non-opaque triangle (after the facing and
 // opacity rules and, for a fragment, its region) or an instance of AABBs the ray does not skip. Where it returns true,
-// `committed` is what the query's state machine would commit with the application seeing nothing: the query is done.
+// `committed` is what the query's state machine would commit with the application seeing nothing, every field
+// (positions and object-space ray included): the query is done.
 bool traceKernelForQuery(const std::byte* topLevel, BlasResolver resolver, const KernelRay& ray, KernelScratch& scratch,
                          QueryHit& committed);
 

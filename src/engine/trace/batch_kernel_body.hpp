@@ -52,10 +52,15 @@ static inline void testTriangleLeaf(Walk& w, const std::byte* blas, format::Chil
                 w.needsQuery = w.done = true;
                 return;
             }
-            float v[3][3];
-            leaf.positions(lane0 + lane, v);
-            setTriangleHit(*w.committed, kCommittedTriangle, c, leaf.geometryIndex(lane0 + lane),
-                           leaf.primitiveIndex()[lane0 + lane], v, w.instance, w.objectRay);
+            if (kForQuery) {  // the query's getters read the whole record
+                float v[3][3];
+                leaf.positions(lane0 + lane, v);
+                setTriangleHit(*w.committed, kCommittedTriangle, c, leaf.geometryIndex(lane0 + lane),
+                               leaf.primitiveIndex()[lane0 + lane], v, w.instance, w.objectRay);
+            } else {  // a batch reports only part of it
+                setReportedTriangleHit(*w.committed, c, leaf.geometryIndex(lane0 + lane),
+                                       leaf.primitiveIndex()[lane0 + lane], w.instance);
+            }
             w.tMax = c.hit.t;
             if (w.flags & kRayTerminateOnFirstHit) {
                 w.done = true;

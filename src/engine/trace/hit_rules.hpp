@@ -229,4 +229,21 @@ inline void setTriangleHit(QueryHit& h, uint32_t type, const TriangleCandidate& 
         for (int a = 0; a < 3; ++a) h.trianglePositions[k][a] = v[k][a];
 }
 
+// The part of a triangle hit record that a batch reports (VkasHit, written by api/batch_trace.cpp's writeHit): t,
+// barycentrics, facing, the instance and the triangle's indices. The batch kernel fills only these for a ray of
+// vkasTraceRays; the ray query fills the whole record (setTriangleHit), whose positions (position fetch) and
+// object-space ray only its getters read.
+inline void setReportedTriangleHit(QueryHit& h, const TriangleCandidate& c, uint32_t geometryIndex,
+                                   uint32_t primitiveIndex, const format::InstanceRecord* instance) {
+    h.type = kCommittedTriangle;
+    h.t = c.hit.t;
+    h.barycentrics[0] = c.hit.b;
+    h.barycentrics[1] = c.hit.c;
+    h.frontFace = c.frontFace;
+    h.instance = instance;
+    h.isTriangle = true;
+    h.triangleGeometryIndex = geometryIndex;
+    h.trianglePrimitiveIndex = primitiveIndex;
+}
+
 }  // namespace vkas
