@@ -126,8 +126,11 @@ TEST_F(TreeBuilders, both_builders_keep_the_output_contract_and_ignore_threading
                 SCOPED_TRACE(::testing::Message() << "n " << n << " flags " << flags << " maxLeaf " << maxLeaf);
                 const std::vector<PrimRef> refs = randomRefs(n);
                 const BvhBuildSettings settings = buildSettingsFor(maxLeaf, flags);
-                EXPECT_EQ(settings.morton, (flags & VK_BUILD_ACCELERATION_STRUCTURE_PREFER_FAST_BUILD_BIT_KHR) != 0);
-                EXPECT_EQ(settings.quality, (flags & VK_BUILD_ACCELERATION_STRUCTURE_PREFER_FAST_TRACE_BIT_KHR) != 0);
+                const TreeBuilder expected =
+                    (flags & VK_BUILD_ACCELERATION_STRUCTURE_PREFER_FAST_BUILD_BIT_KHR)   ? TreeBuilder::Morton
+                    : (flags & VK_BUILD_ACCELERATION_STRUCTURE_PREFER_FAST_TRACE_BIT_KHR) ? TreeBuilder::Quality
+                                                                                          : TreeBuilder::Sah;
+                EXPECT_EQ(settings.builder, expected);
                 // Only the default bottom-level build bins samples of large ranges (n 20000 and 150000 do).
                 EXPECT_EQ(settings.binSampleTarget != 0, flags == 0 && maxLeaf != format::kMaxInstancesPerLeaf);
                 const Built serial = build(refs, settings, nullptr);
@@ -181,7 +184,7 @@ TEST_F(TreeBuilders, the_quality_builders_collapse_costs_no_more_than_greedy_nod
             const std::vector<PrimRef> refs = randomRefs(n);
             const BvhBuildSettings quality = buildSettingsFor(maxLeaf, VK_BUILD_ACCELERATION_STRUCTURE_PREFER_FAST_TRACE_BIT_KHR);
             BvhBuildSettings greedy = quality;
-            greedy.quality = false;
+            greedy.builder = TreeBuilder::Sah;
             const Built q = build(refs, quality, nullptr), g = build(refs, greedy, nullptr);
             const double qc = collapseCost(q, q.result.root, q.result.bounds, CollapseCosts{});
             const double gc = collapseCost(g, g.result.root, g.result.bounds, CollapseCosts{});

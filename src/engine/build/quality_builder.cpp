@@ -20,7 +20,7 @@ BvhBuildResult buildQualityBvh(PrimRef* refs, uint32_t n, const BvhBuildSettings
                                                table, spare, nodes);
     if (wide.ok) return wide.tree;
     BvhBuildSettings fallback = settings;
-    fallback.quality = false;
+    fallback.builder = TreeBuilder::Sah;
     return buildSahBvh(refs, n, fallback, nodes, workspace, parallel);
 }
 

@@ -16,7 +16,7 @@ BvhBuildSettings structureBuildSettings(const VkAccelerationStructureBuildGeomet
                                         uint64_t primitiveCount) {
     const format::StructureType type = structureTypeOf(uint32_t(info.type));  // (the enum's values are Vulkan's)
     BvhBuildSettings settings = buildSettingsFor(maxLeafSize(type), info.flags);
-    if (settings.quality && usesSpatialSplits(type, recordPrimitiveType(info), usesMotionRecords(info), info.flags))
+    if (settings.builder == TreeBuilder::Quality && usesSpatialSplits(type, recordPrimitiveType(info), usesMotionRecords(info), info.flags))
         settings.splitBudget = uint32_t(spatialSplitBudget(primitiveCount));
     return settings;
 }

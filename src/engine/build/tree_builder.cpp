@@ -11,26 +11,39 @@ namespace vkas {
 
 BvhBuildSettings buildSettingsFor(uint32_t maxLeafSize, uint32_t buildFlags) {
     BvhBuildSettings s{maxLeafSize};
-    if (buildFlags & VK_BUILD_ACCELERATION_STRUCTURE_PREFER_FAST_BUILD_BIT_KHR) s.morton = true;
+    // PREFER_FAST_BUILD wins where an application sets both preferences.
+    if (buildFlags & VK_BUILD_ACCELERATION_STRUCTURE_PREFER_FAST_BUILD_BIT_KHR)
+        s.builder = TreeBuilder::Morton;
+    else if (buildFlags & VK_BUILD_ACCELERATION_STRUCTURE_PREFER_FAST_TRACE_BIT_KHR)
+        s.builder = TreeBuilder::Quality;
     if ((buildFlags & VK_BUILD_ACCELERATION_STRUCTURE_PREFER_FAST_TRACE_BIT_KHR) ||
         maxLeafSize == format::kMaxInstancesPerLeaf)
         s.fewBinsBelow = 0;
-    if ((buildFlags & VK_BUILD_ACCELERATION_STRUCTURE_PREFER_FAST_TRACE_BIT_KHR) && !s.morton) s.quality = true;
-    if (!s.morton && !s.quality && maxLeafSize != format::kMaxInstancesPerLeaf) s.binSampleTarget = kDefaultBinSampleTarget;
+    if (s.builder == TreeBuilder::Sah && maxLeafSize != format::kMaxInstancesPerLeaf)
+        s.binSampleTarget = kDefaultBinSampleTarget;
     return s;
 }
 
 uint64_t treeWorkspacePerPrimitive(const BvhBuildSettings& settings) {
-    if (settings.quality && settings.splitBudget != 0) return spatialSplitWorkspacePerPrimitive();
-    return settings.quality ? qualityWorkspacePerPrimitive() : kTreeWorkspacePerPrimitive;
+    switch (settings.builder) {
+        case TreeBuilder::Quality:
+            return settings.splitBudget != 0 ? spatialSplitWorkspacePerPrimitive() : qualityWorkspacePerPrimitive();
+        case TreeBuilder::Sah:
+        case TreeBuilder::Morton: break;
+    }
+    return kTreeWorkspacePerPrimitive;
 }
 
 BvhBuildResult buildTree(PrimRef* refs, uint32_t n, const BvhBuildSettings& settings, format::Node* nodes,
                          std::byte* workspace, const ParallelFor* parallel) {
-    if (settings.morton) return buildMortonBvh(refs, n, settings.maxLeafSize, nodes, workspace, parallel);
-    if (settings.quality && settings.splitBudget != 0 && settings.triangles)
-        return buildSpatialSplitBvh(refs, n, settings, nodes, workspace, parallel);
-    if (settings.quality) return buildQualityBvh(refs, n, settings, nodes, workspace, parallel);
+    switch (settings.builder) {
+        case TreeBuilder::Morton: return buildMortonBvh(refs, n, settings.maxLeafSize, nodes, workspace, parallel);
+        case TreeBuilder::Quality:
+            if (settings.splitBudget != 0 && settings.triangles)
+                return buildSpatialSplitBvh(refs, n, settings, nodes, workspace, parallel);
+            return buildQualityBvh(refs, n, settings, nodes, workspace, parallel);
+        case TreeBuilder::Sah: break;
+    }
     return buildSahBvh(refs, n, settings, nodes, workspace, parallel);
 }
 

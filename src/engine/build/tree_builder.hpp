@@ -1,9 +1,12 @@
-// The builder selector: every structure build hands its primitive boxes (PrimRefs) to buildTree, which picks the
-// builder the build flags ask for and writes 8-wide nodes. Both builders keep one output contract: refs reordered
-// so that leaves are ranges of them, nodes in preorder, at most maxWideNodeCount(n, maxLeafSize) of them
-// (format/sizes.hpp), depth at most format::kMaxTreeDepth, bytes independent of threading.
-//   - binned SAH (sah_builder.hpp): the default and PREFER_FAST_TRACE;
-//   - Morton codes (morton_builder.hpp): PREFER_FAST_BUILD.
+// The builder selector: every structure build hands its primitive boxes (PrimRefs) to buildTree, which runs the
+// builder its settings name (TreeBuilder, chosen from the build flags by buildSettingsFor) and writes 8-wide nodes.
+// Every builder keeps one output contract: refs reordered so that leaves are ranges of them, nodes in preorder, at
+// most maxWideNodeCount(n, maxLeafSize) of them (format/sizes.hpp), depth at most format::kMaxTreeDepth, bytes
+// independent of threading.
+//   - binned SAH (sah_builder.hpp): the default build, bottom and top levels;
+//   - Morton codes (morton_builder.hpp): PREFER_FAST_BUILD (which wins where both preferences are set);
+//   - the quality builder (quality_builder.hpp: a binary SAH tree collapsed optimally): PREFER_FAST_TRACE, with
+//     spatial splits (spatial_split_builder.hpp) where the structure build gives it a split budget and its triangles.
 #pragma once
 
 #include <cstdint>
@@ -35,6 +38,13 @@ inline void setPrimRef(PrimRef& ref, uint32_t index, const Aabb& b) {
 // build time of the bench meshes (docs/PERFORMANCE.md, "Sampled binning").
 constexpr uint32_t kDefaultBinSampleTarget = 1024;
 
+// Which builder a build runs (one selector, as madmann91/bvh's default_builder.h: an enum, not a set of flags).
+enum class TreeBuilder {
+    Sah,      // binned SAH, straight to 8-wide nodes (sah_builder.hpp)
+    Morton,   // Morton codes (morton_builder.hpp): PREFER_FAST_BUILD
+    Quality,  // binary SAH collapsed optimally (quality_builder.hpp), spatial splits with a split budget: PREFER_FAST_TRACE
+};
+
 struct BvhBuildSettings {
     uint32_t maxLeafSize;        // ranges of at most this many primitives become leaves
     uint32_t binCount = 32;      // SAH bins per axis (at most 32)
@@ -44,9 +54,8 @@ struct BvhBuildSettings {
     // split is chosen from the sample; the children's bounds are still every primitive's): the top of a large tree
     // is found at a fraction of the cost. 0: every primitive is binned.
     uint32_t binSampleTarget = 0;
-    bool morton = false;  // build with the Morton-code builder (morton_builder.hpp) instead of the SAH
-    bool quality = false;  // build with the quality builder (quality_builder.hpp): binary SAH, optimal collapse
-    // With quality: also cut references at planes, up to splitBudget cuts (spatial_split_builder.hpp), over the
+    TreeBuilder builder = TreeBuilder::Sah;
+    // With TreeBuilder::Quality: also cut references at planes, up to splitBudget cuts (spatial_split_builder.hpp), over the
     // gathered triangles the refs' indices name. Set by the structure build where format/sizes.hpp's
     // usesSpatialSplits allows it (the selector sees no triangles).
     uint32_t splitBudget = 0;
