@@ -216,13 +216,14 @@ public:
         const uint32_t n = childRanges(r, children);
         Node node;
         for (uint32_t i = 0; i < format::kNodeWidth; ++i) {
-            SimdBoxNanSpreads child;
-            node.child[i] = format::kEmptyRef;
-            if (i < n) {
-                node.child[i] = build(children[i], child);
-                box.extend(child);
+            if (i >= n) {
+                format::setEmptySlot(node, i);
+                continue;
             }
-            setSlot(node, i, child);
+            SimdBoxNanSpreads child;
+            const ChildRef ref = build(children[i], child);
+            box.extend(child);
+            setSlot(node, i, child, ref);
         }
         nodes_[index] = node;
         return format::makeInternalRef(index);
@@ -250,13 +251,12 @@ public:
         return n;
     }
 
-    // Slot i of `node` gets box b.
-    static void setSlot(Node& node, uint32_t i, const SimdBoxNanSpreads& b) {
+    // Slot i of `node` gets box b and reference ref.
+    static void setSlot(Node& node, uint32_t i, const SimdBoxNanSpreads& b, ChildRef ref) {
         alignas(16) float lo[4], up[4];
         _mm_store_ps(lo, b.lower);
         _mm_store_ps(up, b.upper);
-        node.lowerX[i] = lo[0], node.lowerY[i] = lo[1], node.lowerZ[i] = lo[2];
-        node.upperX[i] = up[0], node.upperY[i] = up[1], node.upperZ[i] = up[2];
+        format::setSlot(node, i, lo, up, ref);
     }
 
     uint32_t maxLeafSize() const { return maxLeafSize_; }
@@ -416,22 +416,24 @@ private:
         const uint32_t index = next_++;
         Node node;
         for (uint32_t i = 0; i < format::kNodeWidth; ++i) {
-            SimdBoxNanSpreads child;
-            node.child[i] = format::kEmptyRef;
-            if (i < top.n) {
-                if (top.next[i] == kLeaf) {
-                    node.child[i] = top_.leaf(top.children[i], child);
-                } else if (top.next[i] == kPart) {
-                    const uint32_t p = top.part[i];
-                    node.child[i] = format::makeInternalRef(partBase_[p]);  // more than a leaf: its root is a node
-                    child = partBoxes_[p];
-                    next_ += partNodes_[p];
-                } else {
-                    node.child[i] = writeTop(top.next[i], child);
-                }
-                box.extend(child);
+            if (i >= top.n) {
+                format::setEmptySlot(node, i);
+                continue;
             }
-            TreeWriter::setSlot(node, i, child);
+            SimdBoxNanSpreads child;
+            ChildRef ref;
+            if (top.next[i] == kLeaf) {
+                ref = top_.leaf(top.children[i], child);
+            } else if (top.next[i] == kPart) {
+                const uint32_t p = top.part[i];
+                ref = format::makeInternalRef(partBase_[p]);  // more than a leaf: its root is a node
+                child = partBoxes_[p];
+                next_ += partNodes_[p];
+            } else {
+                ref = writeTop(top.next[i], child);
+            }
+            box.extend(child);
+            TreeWriter::setSlot(node, i, child, ref);
         }
         nodes_[index] = node;
         return format::makeInternalRef(index);

@@ -100,16 +100,11 @@ public:
             children[n++] = right;
         }
         Node node;
-        for (uint32_t i = 0; i < format::kNodeWidth; ++i) {
-            node.lowerX[i] = node.lowerY[i] = node.lowerZ[i] = std::numeric_limits<float>::infinity();
-            node.upperX[i] = node.upperY[i] = node.upperZ[i] = -std::numeric_limits<float>::infinity();
-            node.child[i] = format::kEmptyRef;
-        }
+        for (uint32_t i = n; i < format::kNodeWidth; ++i) format::setEmptySlot(node, i);
         for (uint32_t i = 0; i < n; ++i) {
             const Aabb& b = children[i].bounds;
-            node.lowerX[i] = b.lower.x, node.lowerY[i] = b.lower.y, node.lowerZ[i] = b.lower.z;
-            node.upperX[i] = b.upper.x, node.upperY[i] = b.upper.y, node.upperZ[i] = b.upper.z;
-            node.child[i] = build(children[i]);
+            const float lower[3] = {b.lower.x, b.lower.y, b.lower.z}, upper[3] = {b.upper.x, b.upper.y, b.upper.z};
+            format::setSlot(node, i, lower, upper, build(children[i]));
         }
         (growing_ ? (*growing_)[index] : nodes_[index]) = node;
         return format::makeInternalRef(index);

@@ -94,16 +94,10 @@ public:
         uint32_t roots[kWidth];
         const uint32_t n = nodeRoots(b, roots);
         Node node;
-        for (uint32_t i = 0; i < kWidth; ++i) {
-            node.lowerX[i] = node.lowerY[i] = node.lowerZ[i] = std::numeric_limits<float>::infinity();
-            node.upperX[i] = node.upperY[i] = node.upperZ[i] = -std::numeric_limits<float>::infinity();
-            node.child[i] = format::kEmptyRef;
-        }
+        for (uint32_t i = n; i < kWidth; ++i) format::setEmptySlot(node, i);
         for (uint32_t i = 0; i < n; ++i) {
             const BinaryNode& r = tree_[roots[i]];
-            node.lowerX[i] = r.lower[0], node.lowerY[i] = r.lower[1], node.lowerZ[i] = r.lower[2];
-            node.upperX[i] = r.upper[0], node.upperY[i] = r.upper[1], node.upperZ[i] = r.upper[2];
-            node.child[i] = table_[roots[i]].asLeaf ? emitLeaf(roots[i]) : emit(roots[i]);
+            format::setSlot(node, i, r.lower, r.upper, table_[roots[i]].asLeaf ? emitLeaf(roots[i]) : emit(roots[i]));
         }
         nodes_[index] = node;
         return format::makeInternalRef(index);

@@ -104,6 +104,24 @@ struct alignas(64) Node {
 };
 static_assert(sizeof(Node) == 256);
 
+// A node's slots are written through these, the one place that says what a slot holds (issue 37): a used slot its
+// child's box and reference; an empty slot the box +inf / -inf, which no ray enters (trace/node_test_sse.hpp: tNear
+// is never finite), and kEmptyRef, which a traversal pops as neither node nor leaf (check.cpp refuses one with
+// payload bits).
+inline void setSlotBox(Node& n, uint32_t i, const float lower[3], const float upper[3]) {
+    n.lowerX[i] = lower[0], n.lowerY[i] = lower[1], n.lowerZ[i] = lower[2];
+    n.upperX[i] = upper[0], n.upperY[i] = upper[1], n.upperZ[i] = upper[2];
+}
+inline void setSlot(Node& n, uint32_t i, const float lower[3], const float upper[3], ChildRef ref) {
+    setSlotBox(n, i, lower, upper);
+    n.child[i] = ref;
+}
+inline void setEmptySlot(Node& n, uint32_t i) {
+    constexpr float kLower[3] = {__builtin_inff(), __builtin_inff(), __builtin_inff()};
+    constexpr float kUpper[3] = {-__builtin_inff(), -__builtin_inff(), -__builtin_inff()};
+    setSlot(n, i, kLower, kUpper, kEmptyRef);
+}
+
 // Triangle record flags.
 constexpr uint32_t kTriangleOpaque = 0x1;      // the geometry's OPAQUE flag
 constexpr uint32_t kTriangleDegenerate = 0x2;  // kept for updates, never hit

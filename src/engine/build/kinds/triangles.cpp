@@ -583,12 +583,11 @@ private:
         Node* node;
         uint32_t slot;
     };
-    static void setSlot(Node& n, uint32_t i, const SimdBoxNanIgnored& b) {
+    static void setSlot(Node& n, uint32_t i, const SimdBoxNanIgnored& b) {  // (its reference stays)
         alignas(16) float lo[4], up[4];
         _mm_store_ps(lo, b.lower);
         _mm_store_ps(up, b.upper);
-        n.lowerX[i] = lo[0], n.lowerY[i] = lo[1], n.lowerZ[i] = lo[2];
-        n.upperX[i] = up[0], n.upperY[i] = up[1], n.upperZ[i] = up[2];
+        format::setSlotBox(n, i, lo, up);
     }
 };
 
