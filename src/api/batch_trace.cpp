@@ -6,7 +6,8 @@
 #include <string>
 
 #include "api/device.hpp"
-#include "api/guard.hpp"
+#include "api/command_memory.hpp"
+#include "api/exception_result.hpp"
 #include "api/validate/ray.hpp"
 #include "api/validate/validator.hpp"
 #include "engine/trace/batch_kernel.hpp"

@@ -8,7 +8,7 @@
 #include "api/device.hpp"
 #include "api/micromap.hpp"
 #include "api/entry_points.hpp"
-#include "api/guard.hpp"
+#include "api/object_lifetime.hpp"
 #include "api/validate/build_infos.hpp"
 #include "engine/build/refit.hpp"
 #include "engine/build/structure_build.hpp"

@@ -12,7 +12,7 @@
 #include <vector>
 
 #include "api/entry_points.hpp"
-#include "api/guard.hpp"
+#include "api/object_lifetime.hpp"
 #include "api/validate/copy_infos.hpp"
 #include "api/validate/parameters.hpp"
 #include "engine/format/layout.hpp"

@@ -8,7 +8,8 @@
 
 #include "api/device.hpp"
 #include "api/entry_points.hpp"
-#include "api/guard.hpp"
+#include "api/exception_result.hpp"
+#include "api/object_lifetime.hpp"
 #include "api/validate/parameters.hpp"
 
 namespace vkas {

@@ -1,7 +1,9 @@
 #include "api/device.hpp"
 
 #include "api/deferred_operation.hpp"
-#include "api/guard.hpp"
+#include "api/command_memory.hpp"
+#include "api/exception_result.hpp"
+#include "api/object_lifetime.hpp"
 
 #include "api/validate/validator.hpp"
 #include "engine/format/layout.hpp"

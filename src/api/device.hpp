@@ -25,7 +25,7 @@ public:
 
     // The device's VkAllocationCallbacks (zeroed: none) and the resources over them, one per scope; without
     // callbacks each is std::pmr::new_delete_resource(). commandMemory() is made current for every command of the
-    // device that has no pAllocator of its own (api/guard.hpp, HostMemoryFor).
+    // device that has no pAllocator of its own (api/command_memory.hpp, CommandHostMemory).
     const VkAllocationCallbacks& allocator() const { return allocator_; }
     std::pmr::memory_resource* commandMemory() { return command_.orElse(std::pmr::new_delete_resource()); }
     std::pmr::memory_resource* objectMemory() { return object_.orElse(std::pmr::new_delete_resource()); }

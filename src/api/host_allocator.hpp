@@ -1,6 +1,6 @@
 // The application's VkAllocationCallbacks as a std::pmr::memory_resource (engine/util/host_memory.hpp): every
 // allocation is one pfnAllocation call with the requested alignment and this resource's VkSystemAllocationScope,
-// every deallocation one pfnFree. A NULL from pfnAllocation throws std::bad_alloc, which guarded() (api/guard.hpp)
+// every deallocation one pfnFree. A NULL from pfnAllocation throws std::bad_alloc, which guarded() (api/exception_result.hpp)
 // and the deferred-operation and worker threads turn into VK_ERROR_OUT_OF_HOST_MEMORY. docs/API.md "Host memory"
 // says which allocation takes which callbacks and scope.
 #pragma once

@@ -5,7 +5,7 @@
 
 #include "api/device.hpp"
 #include "api/entry_points.hpp"
-#include "api/guard.hpp"
+#include "api/object_lifetime.hpp"
 #include "api/validate/memory.hpp"
 #include "api/validate/parameters.hpp"
 #include "engine/util/pnext_chain.hpp"

@@ -9,7 +9,7 @@
 #include "api/deferred_operation.hpp"
 #include "api/device.hpp"
 #include "api/entry_points.hpp"
-#include "api/guard.hpp"
+#include "api/object_lifetime.hpp"
 #include "api/micromap.hpp"
 #include "api/validate/micromap_build_infos.hpp"
 #include "api/validate/micromap_create_info.hpp"

@@ -10,7 +10,6 @@
 #include "api/copy_commands.hpp"
 #include "api/deferred_operation.hpp"
 #include "api/entry_points.hpp"
-#include "api/guard.hpp"
 #include "api/micromap.hpp"
 #include "api/validate/micromap_copy_infos.hpp"
 #include "api/validate/parameters.hpp"

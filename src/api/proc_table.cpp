@@ -3,7 +3,7 @@
 
 #include "api/device.hpp"
 #include "api/entry_points.hpp"
-#include "api/guard.hpp"
+#include "api/guarded_command.hpp"
 #include "api/limits.hpp"
 #include "engine/format/micromap_layout.hpp"
 #include "engine/input/vertex_format.hpp"
@@ -16,7 +16,7 @@ struct ProcEntry {
     PFN_vkVoidFunction function;
 };
 
-// Every command runs through Guarded (api/guard.hpp): out of memory becomes VK_ERROR_OUT_OF_HOST_MEMORY, never an
+// Every command runs through Guarded (api/guarded_command.hpp): out of memory becomes VK_ERROR_OUT_OF_HOST_MEMORY, never an
 // exception.
 #define VKAS_PROC(name, fn) {name, reinterpret_cast<PFN_vkVoidFunction>(&vkas::Guarded<&vkas::entry::fn>::call)}
 const ProcEntry kProcs[] = {

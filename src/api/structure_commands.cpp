@@ -4,7 +4,7 @@
 #include "api/build_geometry_info.hpp"
 #include "api/device.hpp"
 #include "api/entry_points.hpp"
-#include "api/guard.hpp"
+#include "api/object_lifetime.hpp"
 #include "api/limits.hpp"
 #include "api/validate/geometry_info.hpp"
 #include "api/validate/parameters.hpp"
