@@ -54,25 +54,13 @@ VKAPI_ATTR VkResult VKAPI_CALL BuildAccelerationStructuresKHR(
         return r;
     };
     if (deferredOperation != VK_NULL_HANDLE) {
-        // Nothing runs now: each info becomes a task of the operation, run by the threads that join it.
-        auto* op = fromHandle<DeferredOperation>(deferredOperation);
-        ScopedHostMemory memory(op->stateMemory());  // the captured work lasts while the operation is pending
-        HostVector<VkResult> results(infoCount, VK_SUCCESS);
-        VkResult* out = results.data();  // stays where it is when `results` moves into the finishing step
-        HostVector<DeferredOperation::Task> tasks;
-        tasks.reserve(infoCount);
+        // Nothing runs now: each info becomes a task of the operation, run by the threads that join it, which a
+        // large build spreads its work over (the hint: about one thread per 4,096 primitives).
         uint64_t primitives = 0;
-        for (uint32_t i = 0; i < infoCount; ++i) {
-            tasks.emplace_back([=] { out[i] = runInfo(i, &op->parallelFor()); });
+        for (uint32_t i = 0; i < infoCount; ++i)
             for (uint32_t g = 0; g < pInfos[i].geometryCount; ++g) primitives += ppBuildRangeInfos[i][g].primitiveCount;
-        }
         const uint32_t hint = uint32_t(std::min<uint64_t>(infoCount + primitives / 4096, 256));
-        op->start(std::move(tasks), [results = std::move(results)] {
-            for (VkResult r : results)
-                if (r != VK_SUCCESS) return r;
-            return VK_SUCCESS;
-        }, hint);
-        return VK_OPERATION_DEFERRED_KHR;
+        return deferEach(*fromHandle<DeferredOperation>(deferredOperation), infoCount, hint, runInfo);
     }
     VkResult result = VK_SUCCESS;
     for (uint32_t i = 0; i < infoCount; ++i)

@@ -98,6 +98,27 @@ public:
     DeferredOperation();
 };
 
+// Makes runOne(i, &op.parallelFor()) for i in [0, count) the tasks of `op` (run by the threads that join it, `hint`
+// its concurrency hint; each task a copy of runOne, which must own what it reads) and returns
+// VK_OPERATION_DEFERRED_KHR. The operation's result is VK_SUCCESS, or the first failure in task order. The
+// per-info commands (vkBuildAccelerationStructuresKHR, vkBuildMicromapsEXT) defer through this.
+template <class RunOne>
+VkResult deferEach(DeferredOperation& op, uint32_t count, uint32_t hint, const RunOne& runOne) {
+    ScopedHostMemory memory(op.stateMemory());  // the captured work lasts while the operation is pending
+    HostVector<VkResult> results(count, VK_SUCCESS);
+    VkResult* out = results.data();  // stays where it is when `results` moves into the finishing step
+    HostVector<DeferredOperation::Task> tasks;
+    tasks.reserve(count);
+    DeferredOperation* o = &op;
+    for (uint32_t i = 0; i < count; ++i) tasks.emplace_back([=] { out[i] = runOne(i, &o->parallelFor()); });
+    op.start(std::move(tasks), [results = std::move(results)] {
+        for (VkResult r : results)
+            if (r != VK_SUCCESS) return r;
+        return VK_SUCCESS;
+    }, hint);
+    return VK_OPERATION_DEFERRED_KHR;
+}
+
 // Runs `work` now when operation is VK_NULL_HANDLE and returns its result; otherwise makes it the operation's one
 // task (its result becomes the operation's) and returns VK_OPERATION_DEFERRED_KHR.
 template <class Work>

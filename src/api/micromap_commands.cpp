@@ -160,18 +160,8 @@ VKAPI_ATTR VkResult VKAPI_CALL BuildMicromapsEXT(VkDevice device, VkDeferredOper
         // The spec has no rule for this command against a pending operation (03678 is not among its rules), so
         // nothing is reported; starting it again would drop the pending work.
         if (op->pending()) return VK_ERROR_UNKNOWN;
-        ScopedHostMemory memory(op->stateMemory());  // the captured work lasts while the operation is pending
-        HostVector<VkResult> results(infoCount, VK_SUCCESS);
-        VkResult* out = results.data();  // stays where it is when `results` moves into the finishing step
-        HostVector<DeferredOperation::Task> tasks;
-        tasks.reserve(infoCount);
-        for (uint32_t i = 0; i < infoCount; ++i) tasks.emplace_back([=] { out[i] = runInfo(i); });
-        op->start(std::move(tasks), [results = std::move(results)] {
-            for (VkResult r : results)
-                if (r != VK_SUCCESS) return r;
-            return VK_SUCCESS;
-        }, std::min<uint32_t>(infoCount, 256));
-        return VK_OPERATION_DEFERRED_KHR;
+        return deferEach(*op, infoCount, std::min<uint32_t>(infoCount, 256),
+                         [runInfo](uint32_t i, const ParallelFor*) { return runInfo(i); });
     }
     VkResult result = VK_SUCCESS;
     for (uint32_t i = 0; i < infoCount; ++i)
