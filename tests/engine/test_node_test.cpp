@@ -1,5 +1,5 @@
-// The ray / node test on its own: the SSE2 version (trace/node_test_sse.hpp) against a scalar reference written
-// here from its documented rule, the AVX2 and AVX-512 versions (trace/node_test_avx2.hpp, node_test_avx512.hpp)
+// The ray / node test on its own: the SSE2 version (trace/node_intersector_sse.hpp) against a scalar reference written
+// here from its documented rule, the AVX2 and AVX-512 versions (trace/node_intersector_avx2.hpp, node_intersector_avx512.hpp)
 // against the SSE2 one and each other lane for lane, bit for bit, and all against double-precision slabs: a box
 // the exact ray crosses is never rejected.
 #include <gtest/gtest.h>
@@ -12,9 +12,9 @@
 #include <string>
 
 #include "engine/trace/instruction_set.hpp"
-#include "engine/trace/node_test_avx2.hpp"
-#include "engine/trace/node_test_avx512.hpp"
-#include "engine/trace/node_test_sse.hpp"
+#include "engine/trace/node_intersector_avx2.hpp"
+#include "engine/trace/node_intersector_avx512.hpp"
+#include "engine/trace/node_intersector_sse.hpp"
 #include "engine/trace/ray.hpp"
 #include "vkas_test.hpp"
 
@@ -73,7 +73,7 @@ struct NodeTest : ::testing::Test {
     }
 };
 
-// The rule the SSE and AVX2 versions implement, one lane at a time (node_test_sse.hpp's comment): NaN-ignoring
+// The rule the SSE and AVX2 versions implement, one lane at a time (node_intersector_sse.hpp's comment): NaN-ignoring
 // max / min over the three slabs, clamped to [tMin, tMax], a hit when tNear <= tFar * kFarSlack.
 uint32_t referenceEntries(const Node& node, const vkas::ShearedRay& r, float tMin, float tMax, float out[8]) {
     const vkas::NodePlanes p(node, r);

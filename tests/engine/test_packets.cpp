@@ -1,4 +1,4 @@
-// The packet kernel (engine/trace/packet_tests.hpp, packet_kernel_body.hpp) against the single-ray kernel:
+// The packet kernel (engine/trace/packet_intersectors.hpp, packet_kernel_body.hpp) against the single-ray kernel:
 //   - the group test never drops a child that one of the packet's rays enters (as the single-ray node test decides
 //     it, with that ray's own tMin and tMax), and bounds each entry distance from below; the lane test decides
 //     every ray exactly as the single-ray test does. Random nodes and packets, with planes through the rays' own
@@ -18,9 +18,9 @@
 #include "api/device.hpp"  // resolveAccelerationStructure: instance references to blocks, as vkasTraceRays does
 #include "engine/format/layout.hpp"
 #include "engine/trace/batch_kernel.hpp"
-#include "engine/trace/node_test_sse.hpp"
+#include "engine/trace/node_intersector_sse.hpp"
 #include "engine/trace/packet_gather.hpp"
-#include "engine/trace/packet_tests.hpp"
+#include "engine/trace/packet_intersectors.hpp"
 #include "meshes.hpp"
 
 using namespace vt;

@@ -1,4 +1,4 @@
-// The watertight ray / triangle test on its own (trace/triangle_test.hpp) against a double-precision oracle:
+// The watertight ray / triangle test on its own (trace/triangle_intersector.hpp) against a double-precision oracle:
 // random triangles and rays; where the oracle is clear (the ray passes the triangle's edges by a margin), the
 // test must agree on hit or miss, and on a hit its t and barycentrics must match the oracle's closely.
 #include <gtest/gtest.h>
@@ -6,7 +6,7 @@
 #include <cmath>
 
 #include "engine/trace/ray.hpp"
-#include "engine/trace/triangle_test.hpp"
+#include "engine/trace/triangle_intersector.hpp"
 #include "vkas_test.hpp"
 
 namespace {

@@ -105,7 +105,7 @@ struct alignas(64) Node {
 static_assert(sizeof(Node) == 256);
 
 // A node's slots are written through these, the one place that says what a slot holds (issue 37): a used slot its
-// child's box and reference; an empty slot the box +inf / -inf, which no ray enters (trace/node_test_sse.hpp: tNear
+// child's box and reference; an empty slot the box +inf / -inf, which no ray enters (trace/node_intersector_sse.hpp: tNear
 // is never finite), and kEmptyRef, which a traversal pops as neither node nor leaf (check.cpp refuses one with
 // payload bits).
 inline void setSlotBox(Node& n, uint32_t i, const float lower[3], const float upper[3]) {

@@ -7,14 +7,14 @@
 #include "engine/format/motion.hpp"
 #include "engine/trace/hit_rules.hpp"
 #include "engine/trace/instruction_set.hpp"
-#include "engine/trace/node_test_avx2.hpp"
-#include "engine/trace/node_test_avx512.hpp"
-#include "engine/trace/node_test_sse.hpp"
-#include "engine/trace/packet_tests.hpp"
+#include "engine/trace/node_intersector_avx2.hpp"
+#include "engine/trace/node_intersector_avx512.hpp"
+#include "engine/trace/node_intersector_sse.hpp"
+#include "engine/trace/packet_intersectors.hpp"
 #include "engine/trace/ray.hpp"
 #include "engine/trace/traversal_steps.hpp"
-#include "engine/trace/triangle_leaf_test.hpp"
-#include "engine/trace/triangle_test.hpp"
+#include "engine/trace/triangle_leaf_intersector.hpp"
+#include "engine/trace/triangle_intersector.hpp"
 
 #if defined(__x86_64__)
 #include <immintrin.h>
@@ -56,7 +56,7 @@ inline void transformInstanceRay(const float (*m)[4], const float o[3], const fl
 
 #if VKAS_KERNEL_AVX2
 // The AVX2 kernel: the same body compiled for AVX2 (no FMA: -ffp-contract=off and no FMA target keep the rounding
-// of every operation), with the 8-lane node test (node_test_avx2.hpp) and packet tests (packet_tests.hpp).
+// of every operation), with the 8-lane node test (node_intersector_avx2.hpp) and packet tests (packet_intersectors.hpp).
 #if defined(__clang__)
 #pragma clang attribute push(__attribute__((target("avx2"))), apply_to = function)
 #else
@@ -94,7 +94,7 @@ inline void transformInstanceRay(const float (*m)[4], const float o[3], const fl
 
 #if VKAS_KERNEL_AVX512
 // The AVX-512 kernel: the same body compiled for AVX-512F/VL (no FMA, as above), with the node test whose
-// comparisons land in mask registers (node_test_avx512.hpp); the packet tests and the instance transform are the
+// comparisons land in mask registers (node_intersector_avx512.hpp); the packet tests and the instance transform are the
 // AVX2 ones, which already fill a 256-bit register per step.
 #if defined(__clang__)
 #pragma clang attribute push(__attribute__((target("avx2,avx512f,avx512vl"))), apply_to = function)

@@ -2,7 +2,7 @@
 //
 // It gives exactly what the ray query's state machine (ray_query.hpp) gives for queryRunToCompletion: every
 // non-opaque triangle confirmed, AABB candidates dropped, the same children visited in the same order (the node test
-// of node_test_sse.hpp / node_test_avx2.hpp, the child order of traversal_steps.hpp) and the same triangle decision
+// of node_intersector_sse.hpp / node_intersector_avx2.hpp, the child order of traversal_steps.hpp) and the same triangle decision
 // (hit_rules.hpp), so the same hit, ties included. What it saves is the resumable machinery: the ray and the stack stay in registers and on the kernel's own stack, a hit child is entered
 // without a push and pop, a leaf's triangles are screened four at a time with SIMD before the exact scalar test, and
 // the last bottom-level lookup is cached. It covers top levels without motion over bottom levels of triangles without
@@ -13,7 +13,7 @@
 #include <cstddef>
 #include <cstdint>
 
-#include "engine/trace/packet_tests.hpp"
+#include "engine/trace/packet_intersectors.hpp"
 #include "engine/trace/ray_query.hpp"
 
 namespace vkas {

@@ -18,7 +18,7 @@ struct Walk {
 };
 
 // The triangle decision of the ray query (hit_rules.hpp) for each lane of a leaf that the four-lane test
-// (triangle_leaf_test.hpp) leaves: a non-opaque candidate needs no application decision here and is confirmed on the
+// (triangle_leaf_intersector.hpp) leaves: a non-opaque candidate needs no application decision here and is confirmed on the
 // spot, as queryRunToCompletion does. Lanes are taken in order, so hits and ties are the ray query's. With
 // kFindTies (a ray of a packet, which meets the leaves in another order than it would alone), a triangle met at
 // exactly the committed t is noted in w.tied: the strict interval drops it, so the order decided between the two.

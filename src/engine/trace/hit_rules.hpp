@@ -10,8 +10,8 @@
 #include "engine/trace/fragment_hit_point.hpp"
 #include "engine/trace/opacity_micromap.hpp"
 #include "engine/trace/ray.hpp"
-#include "engine/trace/triangle_leaf_test.hpp"
-#include "engine/trace/triangle_test.hpp"
+#include "engine/trace/triangle_leaf_intersector.hpp"
+#include "engine/trace/triangle_intersector.hpp"
 
 namespace vkas {
 
@@ -168,7 +168,7 @@ inline bool acceptTriangleHit(const ShearedRay& r, float tMin, float tMax, uint3
 // Whether the ray, in [tMin, tMax] (exclusive for triangles), meets the triangle with record flags `recordFlags` at
 // positions `v` (its own, or [NV-motion] the ones interpolated at the ray time) as a candidate: not degenerate,
 // covered (watertight test), not culled by facing nor by opacity. The batch kernel's four-lane leaf test
-// (triangle_leaf_test.hpp) makes the same decision with the intersection's edge functions computed four at a time.
+// (triangle_leaf_intersector.hpp) makes the same decision with the intersection's edge functions computed four at a time.
 inline bool triangleCandidate(const ShearedRay& r, float tMin, float tMax, uint32_t rayFlags, uint32_t instanceFlags,
                               uint32_t recordFlags, const TriangleId& id, const float (*v)[3], TriangleCandidate& out) {
     if (recordFlags & format::kTriangleDegenerate) return false;

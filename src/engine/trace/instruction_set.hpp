@@ -11,7 +11,7 @@ namespace vkas {
 enum class TraceInstructionSet {
     Sse2,  // the baseline of x86-64 (and the scalar fallback elsewhere)
     Avx2,
-    Avx512,  // AVX-512F and VL: the node test's comparisons in mask registers (node_test_avx512.hpp)
+    Avx512,  // AVX-512F and VL: the node test's comparisons in mask registers (node_intersector_avx512.hpp)
 };
 
 // The best the CPU has among those compiled in, unless the environment variable VKAS_TRACE_KERNEL names a lower one

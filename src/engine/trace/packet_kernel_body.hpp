@@ -3,7 +3,7 @@
 // and leaf tests it uses, with groupEntries and lanesEntering: the packet tests of that instruction set; no include
 // guard, on purpose).
 //
-// Inner nodes are decided for the whole packet by the group test (packet_tests.hpp), one pass over the 8 children;
+// Inner nodes are decided for the whole packet by the group test (packet_intersectors.hpp), one pass over the 8 children;
 // each child that passes is then tested against each ray (the lane test, 8 rays a pass), and the rays that enter a
 // leaf test its triangles alone, with the single-ray leaf test. Where the rays of a packet part ways (fewer than kPacketMinLanes enter a subtree, or their
 // object-space rays at an instance leave the octant) they go on alone with walkTree.

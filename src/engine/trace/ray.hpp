@@ -13,7 +13,7 @@ namespace vkas {
 
 // The plane offsets of ShearedRay for each octant of the direction (bit i: invDir[i] < 0, the ray enters a box
 // through its upper plane on axis i: 32 bytes past the lower one; each axis is 64 bytes past the previous, as
-// format::Node lays them out, which node_test_sse.hpp checks).
+// format::Node lays them out, which node_intersector_sse.hpp checks).
 struct OctantPlanes {
     uint32_t nearPlane[3], farPlane[3];
 };
@@ -26,7 +26,7 @@ struct ShearedRay {
     float sx, sy, sz;
     // The byte offsets in a node (format::Node: lowerX, upperX, lowerY, upperY, lowerZ, upperZ, 8 floats each) of the
     // planes the ray meets first (near) and last (far) on each axis, resolved once per ray from the sign of invDir,
-    // not once per node (node_test_sse.hpp's NodePlanes).
+    // not once per node (node_intersector_sse.hpp's NodePlanes).
     OctantPlanes planes;
 };
 

@@ -5,17 +5,17 @@
 #include <cstring>
 
 #include "engine/format/motion.hpp"
-#include "engine/trace/aabb_test.hpp"
+#include "engine/trace/aabb_intersector.hpp"
 #include "engine/trace/batch_kernel.hpp"
 #include "engine/trace/hit_rules.hpp"
 #include "engine/trace/instruction_set.hpp"
-#include "engine/trace/lss_test.hpp"
-#include "engine/trace/node_test_avx2.hpp"
-#include "engine/trace/node_test_avx512.hpp"
-#include "engine/trace/node_test_sse.hpp"
-#include "engine/trace/sphere_test.hpp"
+#include "engine/trace/lss_intersector.hpp"
+#include "engine/trace/node_intersector_avx2.hpp"
+#include "engine/trace/node_intersector_avx512.hpp"
+#include "engine/trace/node_intersector_sse.hpp"
+#include "engine/trace/sphere_intersector.hpp"
 #include "engine/trace/traversal_steps.hpp"
-#include "engine/trace/triangle_leaf_test.hpp"
+#include "engine/trace/triangle_leaf_intersector.hpp"
 #include "engine/util/math.hpp"
 #include "vkas/vkas_compat.h"
 
@@ -203,7 +203,7 @@ bool visitMotionTriangleLeaf(RayQueryState& q) {
     return false;
 }
 
-// Tests the rest of the current triangle leaf, four lanes at a time as the batch kernel does (triangle_leaf_test.hpp;
+// Tests the rest of the current triangle leaf, four lanes at a time as the batch kernel does (triangle_leaf_intersector.hpp;
 // the lanes of the current four wait in q.leafEdges / q.leafLanes while the application decides a candidate).
 // Returns true when a candidate needs the application.
 bool visitTriangleLeaf(RayQueryState& q) {

@@ -10,7 +10,7 @@
 #include "engine/trace/hit_rules.hpp"
 #include "engine/trace/ray.hpp"
 #include "engine/trace/traversal_steps.hpp"
-#include "engine/trace/triangle_leaf_test.hpp"
+#include "engine/trace/triangle_leaf_intersector.hpp"
 
 namespace vkas {
 
@@ -37,7 +37,7 @@ struct RayQueryState {
     uint64_t topLeafNext, topLeafEnd;
     uint64_t bottomLeafNext, bottomLeafEnd;
     // The current triangle leaf (format 2, layout.hpp TriangleLeaf): where it starts, its triangles, and the four
-    // lanes tested last (triangle_leaf_test.hpp) with those of them still to be taken, lowest first.
+    // lanes tested last (triangle_leaf_intersector.hpp) with those of them still to be taken, lowest first.
     uint64_t bottomLeafFirst;
     uint32_t bottomLeafCount;
     uint32_t leafLane0, leafLanes;

@@ -1,6 +1,6 @@
 // The ray query's walk down the tree from a popped node (ray_query.cpp), included there once per instruction set
 // (no include guard, on purpose), in a namespace that defines NodeRay, prepareNodeRay and nodeTest: the SSE2, AVX2 or
-// AVX-512 node test (node_test_sse.hpp, node_test_avx2.hpp, node_test_avx512.hpp), which give identical results, so
+// AVX-512 node test (node_intersector_sse.hpp, node_intersector_avx2.hpp, node_intersector_avx512.hpp), which give identical results, so
 // the query visits what the batch kernel visits either way.
 //
 // At each node the hit children are pushed, farthest first, except the nearest, which is entered at once: the same as

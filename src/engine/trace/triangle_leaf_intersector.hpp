@@ -1,4 +1,4 @@
-// The watertight triangle test (triangle_test.hpp) on four lanes of a format-2 triangle leaf at once (layout.hpp,
+// The watertight triangle test (triangle_intersector.hpp) on four lanes of a format-2 triangle leaf at once (layout.hpp,
 // TriangleLeaf), for the ray query and both batch kernels.
 //
 // The leaf's rows are loaded as they are stored (one unaligned load per row: the ray's axis permutation selects the
@@ -17,7 +17,7 @@
 
 #include "engine/format/layout.hpp"
 #include "engine/trace/ray.hpp"
-#include "engine/trace/triangle_test.hpp"
+#include "engine/trace/triangle_intersector.hpp"
 
 #if defined(__SSE2__)
 #include <emmintrin.h>

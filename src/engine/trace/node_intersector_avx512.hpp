@@ -1,5 +1,5 @@
 // The ray / 8-wide node test in AVX-512 (F and VL, on 256-bit registers): the same float operations lane by lane
-// as childEntryDistancesAvx2 (node_test_avx2.hpp), on the same prepared ray (NodeRayAvx2), with the comparisons
+// as childEntryDistancesAvx2 (node_intersector_avx2.hpp), on the same prepared ray (NodeRayAvx2), with the comparisons
 // written into mask registers: the hit lanes come out as a mask, with no move from a vector to a general register
 // and no AND of two vector masks. No FMA (the library is compiled with -ffp-contract=off), so each lane keeps the
 // rounding of every operation and the results equal the SSE2 and AVX2 tests bit for bit (tests/engine/test_node_test.cpp).
@@ -10,7 +10,7 @@
 #include <cstdint>
 
 #include "engine/format/layout.hpp"
-#include "engine/trace/node_test_avx2.hpp"
+#include "engine/trace/node_intersector_avx2.hpp"
 #include "engine/trace/ray.hpp"
 
 #if VKAS_NODE_TEST_AVX2

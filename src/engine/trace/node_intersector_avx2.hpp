@@ -1,5 +1,5 @@
 // The ray / 8-wide node test in AVX2: lane by lane the same float operations as childEntryDistances
-// (node_test_sse.hpp), in one 8-lane pass, so its results are identical (no FMA: the library is compiled with
+// (node_intersector_sse.hpp), in one 8-lane pass, so its results are identical (no FMA: the library is compiled with
 // -ffp-contract=off and the function's target has no FMA, which keeps the rounding of every operation). Callable
 // only where the CPU has AVX2 (__builtin_cpu_supports("avx2")); the batch kernel's AVX2 copy inlines it.
 #pragma once
@@ -9,7 +9,7 @@
 #include <cstdint>
 
 #include "engine/format/layout.hpp"
-#include "engine/trace/node_test_sse.hpp"
+#include "engine/trace/node_intersector_sse.hpp"
 #include "engine/trace/ray.hpp"
 
 #if defined(__x86_64__)

@@ -25,7 +25,7 @@
 #include <cstdint>
 #include <utility>
 
-#include "engine/trace/sphere_test.hpp"
+#include "engine/trace/sphere_intersector.hpp"
 
 namespace vkas {
 

@@ -33,7 +33,7 @@ inline float perturbedSign(float p1x, float p1y, float p2x, float p2y) {
 
 // The hit of a triangle the ray covers, from its edge functions U, V, W (float, each of one sign and not zero, or
 // recomputed in double and rounded) and the vertices' z before the shear's scale (Az0 = v0[kz] - org[kz], ...).
-// Shared by intersectTriangle and the four-lane leaf test (triangle_leaf_test.hpp), so both give the same bits.
+// Shared by intersectTriangle and the four-lane leaf test (triangle_leaf_intersector.hpp), so both give the same bits.
 inline bool coveredTriangleHit(const ShearedRay& r, float U, float V, float W, float Az0, float Bz0, float Cz0,
                                TriangleHit& hit) {
     // t and the barycentrics in double: the products of floats are exact there, so only the sums and the

@@ -1,5 +1,5 @@
 // The ray / 8-wide node test, SSE2 version (4 lanes twice; a scalar fallback without SSE2): the one the ray query
-// uses, and the batch kernel's baseline. node_test_avx2.hpp does the same float operations in 8 lanes, so both
+// uses, and the batch kernel's baseline. node_intersector_avx2.hpp does the same float operations in 8 lanes, so both
 // visit exactly the same children in the same order (and so report the same hit, ties included).
 //
 // Box tests accept intervals that overlap within a small relative slack, so rounding in the slab computation never

@@ -3,7 +3,7 @@
 // - The group test (packetChildEntries): one pass over a node's 8 children for the whole packet, with interval
 //   arithmetic over the packet's origins and inverse directions (Boulos et al., "Geometric and arithmetic culling
 //   methods for entire ray packets", 2006). It is conservative to the last bit: every bound is computed with the
-//   float operations of the single-ray test (node_test_sse.hpp) on the extreme operands, and rounding to nearest is
+//   float operations of the single-ray test (node_intersector_sse.hpp) on the extreme operands, and rounding to nearest is
 //   monotone, so a child that any ray of the packet enters (as the single-ray test decides it, with that ray's
 //   tMin and tMax) passes. A child that no ray enters may pass too; it only costs time.
 // - The lane test (lanesEnteringChild): one child against every ray of the packet, one SIMD lane per ray, with
@@ -17,7 +17,7 @@
 #include <cstdint>
 
 #include "engine/format/layout.hpp"
-#include "engine/trace/node_test_sse.hpp"
+#include "engine/trace/node_intersector_sse.hpp"
 #include "engine/trace/ray.hpp"
 
 #if defined(__SSE2__)
