@@ -213,18 +213,24 @@ inline void startHit(QueryHit& h, uint32_t type, float t, const format::Instance
     for (int i = 0; i < 3; ++i) h.objectOrigin[i] = r.org[i], h.objectDirection[i] = r.dir[i];
 }
 
-// Hit record `h` of `type` for the triangle candidate `c`: primitive `primitiveIndex` of geometry `geometryIndex`,
-// at positions `v`.
-inline void setTriangleHit(QueryHit& h, uint32_t type, const TriangleCandidate& c, uint32_t geometryIndex,
-                           uint32_t primitiveIndex, const float (*v)[3], const format::InstanceRecord* instance,
-                           const ShearedRay& r) {
-    startHit(h, type, c.hit.t, instance, r);
+// The triangle's part of hit record `h` (started by startHit or setReportedTriangleHit) for candidate `c`:
+// barycentrics, facing and the triangle's indices.
+inline void setTriangleFields(QueryHit& h, const TriangleCandidate& c, uint32_t geometryIndex, uint32_t primitiveIndex) {
     h.barycentrics[0] = c.hit.b;
     h.barycentrics[1] = c.hit.c;
     h.frontFace = c.frontFace;
     h.isTriangle = true;
     h.triangleGeometryIndex = geometryIndex;
     h.trianglePrimitiveIndex = primitiveIndex;
+}
+
+// Hit record `h` of `type` for the triangle candidate `c`: primitive `primitiveIndex` of geometry `geometryIndex`,
+// at positions `v`.
+inline void setTriangleHit(QueryHit& h, uint32_t type, const TriangleCandidate& c, uint32_t geometryIndex,
+                           uint32_t primitiveIndex, const float (*v)[3], const format::InstanceRecord* instance,
+                           const ShearedRay& r) {
+    startHit(h, type, c.hit.t, instance, r);
+    setTriangleFields(h, c, geometryIndex, primitiveIndex);
     for (int k = 0; k < 3; ++k)
         for (int a = 0; a < 3; ++a) h.trianglePositions[k][a] = v[k][a];
 }
@@ -237,13 +243,8 @@ inline void setReportedTriangleHit(QueryHit& h, const TriangleCandidate& c, uint
                                    uint32_t primitiveIndex, const format::InstanceRecord* instance) {
     h.type = kCommittedTriangle;
     h.t = c.hit.t;
-    h.barycentrics[0] = c.hit.b;
-    h.barycentrics[1] = c.hit.c;
-    h.frontFace = c.frontFace;
     h.instance = instance;
-    h.isTriangle = true;
-    h.triangleGeometryIndex = geometryIndex;
-    h.trianglePrimitiveIndex = primitiveIndex;
+    setTriangleFields(h, c, geometryIndex, primitiveIndex);
 }
 
 }  // namespace vkas
