@@ -67,6 +67,17 @@ void checkScene(const vkas_tool::Scene& scene, const vkas_tool::ModelInfo& info)
 
 }  // namespace
 
+// The importer child is a fork of this process and keeps libFuzzer's allocation hook: one allocation past
+// -malloc_limit_mb (run-fuzzers.sh: the RSS limit) ends it with libFuzzer's out-of-memory status, 71. assimp asks for
+// such an allocation on a header that announces 2^31 list entries: that file is refused as out of memory, as the tool
+// (where the allocation fails) refuses it, not reported as a sanitizer finding.
+constexpr int kLibFuzzerOutOfMemoryExit = 71;
+
+extern "C" int LLVMFuzzerInitialize(int*, char***) {
+    vkas_tool::setImporterOutOfMemoryExitStatus(kLibFuzzerOutOfMemoryExit);
+    return 0;
+}
+
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     static TempDir temp;
     static vkas_tool::VkContext ctx(vkas_tool::DeviceOptions{true, 1, true});

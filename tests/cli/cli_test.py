@@ -334,6 +334,12 @@ def case_bad_no_triangles(): both(write("lines.obj", "v 0 0 0\nv 1 0 0\nl 1 2\n"
 def case_bad_nan_vertex(): both(write("nan.obj", "v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n"), "not finite")
 def case_bad_inf_vertex(): both(write("inf.obj", "v 0 0 0\nv 0 inf 0\nv 0 1 0\nf 1 2 3\n"), "not finite")
 def case_bad_huge_header(): both(write("huge.off", "OFF\n2000000000 1000000000 0\n0 0 0\n"), "announces")
+# Counts whose byte sizes wrap past 2^64 to a few bytes: still more than the file holds (found by vkas_fuzz_mesh_file).
+def case_bad_wrapping_header():
+    both(write("wrap.ply", "ply\nformat binary_little_endian 1.0\nelement vertex 6148914691236517206\nproperty float x\n"
+               "property float y\nproperty float z\nelement face 0\nproperty list uchar int vertex_indices\n"
+               "end_header\n"), "announces")
+    both(write("wrap.off", "OFF\n3074457345618258603 0 0\n0 0 0\n"), "announces")
 def case_bad_camera(): bad(["render", need(BUNNY), "--camera", "1,2,3", "-o", work("c.png")], "--camera")
 
 

@@ -15,6 +15,10 @@ void refuse(const std::string& path, uint64_t vertices, uint64_t faces, uint64_t
                                std::to_string(fileSize) + " bytes can hold");
 }
 
+// The least bytes a body of `count` items of `each` bytes takes, without wrapping: a header may announce counts
+// near 2^64, whose product in 64 bits would wrap to a small number and pass the check (found by vkas_fuzz_mesh_file).
+unsigned __int128 leastBytes(uint64_t count, uint64_t each) { return (unsigned __int128)count * each; }
+
 }  // namespace
 
 void checkDeclaredCounts(const std::string& path, uint64_t fileSize) {
@@ -36,7 +40,7 @@ void checkDeclaredCounts(const std::string& path, uint64_t fileSize) {
             }
         }
         // A vertex takes at least "0 0 0\n" (6 bytes), a face "3 0 1 2\n" (8); binary OFF at least 12 and 16.
-        if (6 * v + 8 * f > fileSize) refuse(path, v, f, fileSize);
+        if (leastBytes(v, 6) + leastBytes(f, 8) > fileSize) refuse(path, v, f, fileSize);
         if (first != "OFF") return;
         // ASCII OFF: assimp 5.2.5's reader crashes (SIGSEGV inside the importer) on a face line that holds fewer
         // indices than its count announces, so every face line is checked first: the count, then that many indices.
@@ -85,7 +89,7 @@ void checkDeclaredCounts(const std::string& path, uint64_t fileSize) {
         // assimp's PLY reader loops forever on a header cut short (assimp 5.2.5): refused here.
         if (!ended) throw InputError(path, "not a mesh file assimp can read: its PLY header has no end_header line (truncated?)");
         const uint64_t perProp = format == "ascii" ? 2 : 1;
-        if (v * std::max<uint64_t>(vertexProps, 3) * perProp + f * 4 * perProp > fileSize) refuse(path, v, f, fileSize);
+        if (leastBytes(v, std::max<uint64_t>(vertexProps, 3) * perProp) + leastBytes(f, 4 * perProp) > fileSize) refuse(path, v, f, fileSize);
     }
 }
 

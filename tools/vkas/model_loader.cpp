@@ -95,6 +95,7 @@ constexpr int kSanitized = 0;
 #endif
 constexpr int kParentGone = 3;  // the child's exit status when its result could not be written
 constexpr int kAssimpMemoryError = 4;  // (sanitized builds) the child's sanitizer report lies inside assimp
+int outOfMemoryExitStatus = 0;         // setImporterOutOfMemoryExitStatus
 
 #if defined(VKAS_TOOL_ASAN)
 extern "C" void __asan_set_error_report_callback(void (*callback)(const char*));
@@ -197,6 +198,8 @@ ImportResult importInChild(const std::string& path, uint64_t fileSize) {
         throw InputError(path, "damaged: assimp's importer did not finish reading it in " + std::to_string(seconds) + " s");
     if (WIFSIGNALED(status))
         throw InputError(path, "damaged: assimp's importer crashed reading it (signal " + std::to_string(WTERMSIG(status)) + ")");
+    if (outOfMemoryExitStatus != 0 && WIFEXITED(status) && WEXITSTATUS(status) == outOfMemoryExitStatus)
+        throw InputError(path, "out of memory while reading it (assimp's importer asked for more than the process may have)");
     // The child exits 0 or dies by a signal; another exit status is a sanitizer's report (in a sanitized build the
     // child runs vkas's own checks instrumented, and a finding there is a bug of vkas, not a damaged file).
     if (kSanitized && WIFEXITED(status) && WEXITSTATUS(status) == kAssimpMemoryError)
@@ -229,6 +232,8 @@ ImportedModel importedModel(const std::string& path, uint64_t fileSize) {
 }
 
 }  // namespace
+
+void setImporterOutOfMemoryExitStatus(int status) { outOfMemoryExitStatus = status; }
 
 ModelInfo loadModel(const std::string& path, Scene& scene) {
     const uint64_t fileSize = checkReadableFile(path);

@@ -22,6 +22,11 @@ struct ModelInfo {
 // Appends the file's meshes, bottom levels, materials and instances to `scene`.
 ModelInfo loadModel(const std::string& path, Scene& scene);
 
+// A program that hosts the loader in a runtime which ends a process on one too large allocation (libFuzzer ends it
+// with status 71 when one allocation passes its -malloc_limit_mb) names that status here: an importer child ending
+// with it ran out of memory, and the file is refused as out of memory, as when the child's allocation fails. 0: none.
+void setImporterOutOfMemoryExitStatus(int status);
+
 // The world-space bounds of every instanced triangle vertex (lo > hi when the scene is empty).
 Box instancedBounds(const Scene& scene);
 
