@@ -1,7 +1,10 @@
 #!/usr/bin/env bash
-# The engine's include direction (docs/ARCHITECTURE.md): util <- format <- input <- build, format <- trace.
-# A folder may include its own headers and those of the folders it depends on, never the others; the engine never
-# includes the API layer. Exits non-zero, naming every offending line, when a file breaks the rule.
+# The include direction (docs/ARCHITECTURE.md "Include direction"): in the engine util <- format <- input <- assemble,
+# format <- builders <- assemble, format <- trace. A folder may include its own headers and those of the folders it
+# depends on, never the others; the engine never includes the API layer. In the API layer, the valid-usage rules
+# (src/api/validate/) read the objects (device, structures, micromaps, limits) and never a command's file
+# (api/*_commands.hpp and the other command sources): the commands call the rules, not the reverse.
+# Exits non-zero, naming every offending line, when a file breaks a rule.
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/../src/engine"
 
@@ -9,7 +12,8 @@ declare -A allowed=(
   [util]="util"
   [format]="util format"
   [input]="util format input"
-  [build]="util format input build"
+  [builders]="util format builders"
+  [assemble]="util format input builders assemble"
   [trace]="util format trace"
 )
 
@@ -35,5 +39,10 @@ done
 for f in *; do
   [ -d "$f" ] || { echo "src/engine/$f: outside the engine's folders (${!allowed[*]})"; status=1; }
 done
-[ $status -eq 0 ] && echo "check-layers: the engine's includes follow util <- format <- input <- build, format <- trace"
+# The API layer: validate/ includes no command file.
+commands='api/(.*_commands|batch_trace|ray_query_api|proc_table|entry_points|guarded_command)\.hpp'
+while IFS= read -r hit; do
+  echo "src/${hit%%:*}: api/validate/ may not include a command's file (${hit##*#include })"; status=1
+done < <(cd .. && grep -rnE "#include \"$commands\"" api/validate | sed -E 's/^([^:]+):([0-9]+):/\1:\2:/')
+[ $status -eq 0 ] && echo "check-layers: the engine's includes follow util <- format <- input <- assemble, format <- builders <- assemble, format <- trace; api/validate/ includes no command"
 exit $status

@@ -10,8 +10,8 @@
 #include "api/entry_points.hpp"
 #include "api/object_lifetime.hpp"
 #include "api/validate/build_infos.hpp"
-#include "engine/build/refit.hpp"
-#include "engine/build/structure_build.hpp"
+#include "engine/assemble/refit.hpp"
+#include "engine/assemble/structure_build.hpp"
 #include "engine/input/build_inputs.hpp"
 
 namespace vkas::entry {
@@ -34,7 +34,7 @@ VKAPI_ATTR VkResult VKAPI_CALL BuildAccelerationStructuresKHR(
         auto* dst = fromHandle<AccelerationStructure>(pInfos[i].dstAccelerationStructure);
         VkResult r;
         if (pInfos[i].mode == VK_BUILD_ACCELERATION_STRUCTURE_MODE_UPDATE_KHR) {
-            // A refit of the source's tree (engine/build/refit.hpp); src == dst refits in place.
+            // A refit of the source's tree (engine/assemble/refit.hpp); src == dst refits in place.
             const auto* src = fromHandle<AccelerationStructure>(pInfos[i].srcAccelerationStructure);
             const std::byte* srcBlock = src ? src->block() : nullptr;
             RefitJob job{&pInfos[i], ppBuildRangeInfos[i], srcBlock, dst->block(), dst->size,

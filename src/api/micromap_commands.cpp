@@ -1,6 +1,6 @@
 // vkCreateMicromapEXT, vkDestroyMicromapEXT, vkGetMicromapBuildSizesEXT and vkBuildMicromapsEXT
 // (VK_EXT_opacity_micromap): valid-usage checks first (api/validate/micromap_*; nothing is written when one fails),
-// then the object, the answer or the engine's build on plain memory (engine/build/micromap_build.hpp), now or as
+// then the object, the answer or the engine's build on plain memory (engine/assemble/micromap_build.hpp), now or as
 // tasks of a deferred operation.
 #include <cstring>
 #include <memory>
@@ -14,7 +14,7 @@
 #include "api/validate/micromap_build_infos.hpp"
 #include "api/validate/micromap_create_info.hpp"
 #include "api/validate/parameters.hpp"
-#include "engine/build/micromap_build.hpp"
+#include "engine/assemble/micromap_build.hpp"
 #include "engine/format/micromap_layout.hpp"
 
 namespace vkas {

@@ -9,9 +9,9 @@
 #include "api/validate/geometry_info.hpp"
 #include "api/validate/parameters.hpp"
 #include "api/validate/structure_create_info.hpp"
-#include "engine/build/opacity_section_build.hpp"
-#include "engine/build/size_query.hpp"
-#include "engine/build/structure_build.hpp"
+#include "engine/assemble/opacity_section_build.hpp"
+#include "engine/assemble/size_query.hpp"
+#include "engine/assemble/structure_build.hpp"
 #include "engine/format/sizes.hpp"
 #include "engine/input/build_inputs.hpp"
 

@@ -5,8 +5,8 @@
 #include <cstring>
 #include <vector>
 
-#include "engine/build/size_query.hpp"
-#include "engine/build/structure_build.hpp"
+#include "engine/assemble/size_query.hpp"
+#include "engine/assemble/structure_build.hpp"
 #include "engine/format/check.hpp"
 #include "engine/format/layout.hpp"
 #include "vkas_test.hpp"

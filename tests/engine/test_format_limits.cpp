@@ -7,7 +7,7 @@
 #include <vulkan/vulkan_core.h>
 
 #include "api/limits.hpp"
-#include "engine/build/size_query.hpp"
+#include "engine/assemble/size_query.hpp"
 #include "engine/format/layout.hpp"
 #include "engine/format/sizes.hpp"
 

@@ -1,4 +1,4 @@
-// PREFER_FAST_TRACE's spatial splits (build/spatial_split_builder.hpp, format/fragment_section.hpp) on plain memory:
+// PREFER_FAST_TRACE's spatial splits (builders/spatial_split_builder.hpp, format/fragment_section.hpp) on plain memory:
 // a structure of large, overlapping triangles is built with fragments; for random points of every triangle exactly
 // one of its records has a region that holds the point, and that record's leaf box holds it too (so a ray through
 // the point visits the one fragment that reports it); the sizes query bounds the structure; threads change no byte;
@@ -12,8 +12,8 @@
 #include <thread>
 #include <vector>
 
-#include "engine/build/size_query.hpp"
-#include "engine/build/structure_build.hpp"
+#include "engine/assemble/size_query.hpp"
+#include "engine/assemble/structure_build.hpp"
 #include "engine/format/check.hpp"
 #include "engine/format/fragment_section.hpp"
 #include "engine/format/layout.hpp"

@@ -1,4 +1,4 @@
-// The builders behind the selector (build/tree_builder.hpp) on their own, on random boxes: each keeps the output
+// The builders behind the selector (builders/tree_builder.hpp) on their own, on random boxes: each keeps the output
 // contract every structure relies on (refs reordered so that leaves are ranges of them, every primitive in exactly
 // one leaf of at most maxLeafSize, nodes in preorder, at most maxWideNodeCount(n) of them, depth within
 // format::kMaxTreeDepth, child boxes that hold their subtree), and a build spread over threads writes the same bytes.
@@ -10,8 +10,8 @@
 #include <thread>
 #include <vector>
 
-#include "engine/build/tree_builder.hpp"
-#include "engine/build/wide_collapse.hpp"
+#include "engine/builders/tree_builder.hpp"
+#include "engine/builders/wide_collapse.hpp"
 #include "engine/format/sizes.hpp"
 #include "engine/util/parallel_for.hpp"
 #include "vkas_test.hpp"
@@ -159,7 +159,7 @@ TEST_F(TreeBuilders, both_builders_keep_the_output_contract_and_ignore_threading
     }
 }
 
-// The cost the quality builder's collapse minimises (build/wide_collapse.hpp), of a built tree: each internal node's
+// The cost the quality builder's collapse minimises (builders/wide_collapse.hpp), of a built tree: each internal node's
 // area times the node cost, each leaf's area times the leaf cost and its primitives'.
 double collapseCost(const Built& b, ChildRef ref, const Aabb& box, const CollapseCosts& c) {
     const double area = box.halfArea();

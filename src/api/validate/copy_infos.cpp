@@ -1,6 +1,6 @@
 #include "api/validate/copy_infos.hpp"
 
-#include "api/copy_commands.hpp"
+#include "api/structure_bytes.hpp"
 #include "api/validate/parameters.hpp"
 #include "engine/util/byte_io.hpp"
 #include "engine/format/layout.hpp"

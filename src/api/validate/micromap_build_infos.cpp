@@ -5,10 +5,10 @@
 #include <cstdio>
 #include <vector>
 
-#include "api/copy_commands.hpp"
+#include "api/structure_bytes.hpp"
 #include "api/deferred_operation.hpp"
 #include "api/validate/parameters.hpp"
-#include "engine/build/micromap_build.hpp"
+#include "engine/assemble/micromap_build.hpp"
 #include "engine/format/micromap_layout.hpp"
 
 namespace vkas {

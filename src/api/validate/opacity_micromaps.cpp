@@ -9,7 +9,7 @@
 #include "api/micromap.hpp"
 #include "api/objects.hpp"
 #include "api/validate/parameters.hpp"
-#include "engine/build/opacity_section_build.hpp"
+#include "engine/assemble/opacity_section_build.hpp"
 #include "engine/format/micromap_layout.hpp"
 #include "engine/format/opacity_section.hpp"
 #include "engine/input/build_inputs.hpp"

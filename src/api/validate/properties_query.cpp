@@ -2,7 +2,7 @@
 
 #include <cstdio>
 
-#include "api/copy_commands.hpp"
+#include "api/structure_bytes.hpp"
 #include "api/validate/parameters.hpp"
 #include "engine/format/layout.hpp"
 

@@ -7,8 +7,8 @@
 #include "api/build_geometry_info.hpp"
 #include "api/validate/opacity_micromaps.hpp"
 #include "api/validate/parameters.hpp"
-#include "engine/build/refit.hpp"
-#include "engine/build/structure_build.hpp"
+#include "engine/assemble/refit.hpp"
+#include "engine/assemble/structure_build.hpp"
 #include "engine/format/layout.hpp"
 #include "engine/input/build_inputs.hpp"
 

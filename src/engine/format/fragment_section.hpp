@@ -1,6 +1,6 @@
 // The fragment section of a bottom level of triangles built with PREFER_FAST_TRACE (docs/FORMAT.md, "Fragments").
 //
-// A spatial split (build/spatial_split_builder.hpp) cuts a triangle's reference in two at a plane, so the triangle is
+// A spatial split (builders/spatial_split_builder.hpp) cuts a triangle's reference in two at a plane, so the triangle is
 // stored in several records, each bounding only its part. Each such record has the kTriangleFragment flag and a
 // region here: a half-open box [lower, upper) of space. The regions of one triangle's fragments partition all of
 // space (they start as the whole space and each split divides one region at its plane), and a fragment reports a

@@ -53,7 +53,7 @@ StructureLayout structureLayout(format::StructureType type, uint32_t primitiveTy
                                 uint64_t nodeCount, uint64_t recordCount, bool motion = false,
                                 uint64_t fragmentCount = 0);
 
-// PREFER_FAST_TRACE with spatial splits (build/spatial_split_builder.hpp): a bottom level of (non-motion) triangles
+// PREFER_FAST_TRACE with spatial splits (builders/spatial_split_builder.hpp): a bottom level of (non-motion) triangles
 // built for the fastest trace and never updated (a refit cannot move a split plane) may store a triangle as several
 // fragment records. The split budget bounds how many: at most spatialSplitBudget(n) splits, each adding one record
 // and at most two fragment entries.

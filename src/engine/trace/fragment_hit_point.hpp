@@ -3,7 +3,7 @@
 //
 // The rule that exactly one fragment reports needs only that every fragment computes the same point: the regions
 // partition space. That the reporting fragment is one the ray visits needs more: the point must lie within the
-// builder's padding (build/spatial_split_builder.cpp, 2^-17 of the triangle's largest coordinate) of where the ray
+// builder's padding (builders/spatial_split_builder.cpp, 2^-17 of the triangle's largest coordinate) of where the ray
 // really crosses the triangle, because only there does the ray pass through the fragment's box. The hit's float
 // barycentrics are no such point: on a thin triangle (or a ray nearly along its plane) the watertight test's edge
 // functions are differences of nearly equal products, and b and c can be wrong by a third of the triangle (issue 35:
