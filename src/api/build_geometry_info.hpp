@@ -1,21 +1,14 @@
-// Reading a VkAccelerationStructureBuildGeometryInfoKHR: the geometry at an index (through pGeometries or
-// ppGeometries) and the engine's structure type for its type. Shared by the build commands and their validation.
+// What validation asks of a VkAccelerationStructureBuildGeometryInfoKHR beyond the engine's reading of it
+// (engine/input/build_inputs.hpp: geometry i, the structure type): whether every geometry is there to read.
 #pragma once
 
 #include <vulkan/vulkan_core.h>
 
 #include <cstdint>
 
-#include "engine/format/layout.hpp"
+#include "engine/input/build_inputs.hpp"  // geometryAt, buildGeometry, structureTypeOf
 
 namespace vkas {
-
-// Geometry i of the info: pGeometries[i], else *ppGeometries[i] (which may be NULL), else nullptr.
-inline const VkAccelerationStructureGeometryKHR* geometryAt(const VkAccelerationStructureBuildGeometryInfoKHR& info,
-                                                            uint32_t i) {
-    if (info.pGeometries) return &info.pGeometries[i];
-    return info.ppGeometries ? info.ppGeometries[i] : nullptr;
-}
 
 // Whether every geometry of the info is there to read (validation reports a NULL one; what reads all of them waits).
 inline bool allGeometriesPresent(const VkAccelerationStructureBuildGeometryInfoKHR& info) {
@@ -23,11 +16,6 @@ inline bool allGeometriesPresent(const VkAccelerationStructureBuildGeometryInfoK
     for (uint32_t g = 0; g < info.geometryCount; ++g)
         if (!geometryAt(info, g)) return false;
     return true;
-}
-
-inline format::StructureType structureType(VkAccelerationStructureTypeKHR t) {
-    return t == VK_ACCELERATION_STRUCTURE_TYPE_TOP_LEVEL_KHR ? format::StructureType::TopLevel
-                                                             : format::StructureType::BottomLevel;
 }
 
 }  // namespace vkas

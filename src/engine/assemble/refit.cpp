@@ -26,8 +26,7 @@ bool refitShapeMatches(const RefitJob& job) {
     const Header* h = header(job.src);
     const auto& info = *job.info;
     if (h->magic != kMagic || h->version != kVersion) return false;
-    const bool top = info.type == VK_ACCELERATION_STRUCTURE_TYPE_TOP_LEVEL_KHR;
-    if (h->type != uint32_t(top ? StructureType::TopLevel : StructureType::BottomLevel)) return false;
+    if (h->type != uint32_t(structureTypeOf(info.type))) return false;
     if (h->geometryCount != info.geometryCount) return false;
     if (motion::isMotionBuild(h->buildFlags) != motion::isMotionBuild(info.flags)) return false;
     if (info.geometryCount != 0 && !info.pGeometries && !info.ppGeometries) return false;

@@ -189,8 +189,7 @@ void writeTriangleLeaves(const BuildJob& job, const Node* nodes, const BvhBuildR
 
 VkResult buildAccelerationStructure(const BuildJob& job) {
     const auto& info = *job.info;
-    const StructureType type = info.type == VK_ACCELERATION_STRUCTURE_TYPE_TOP_LEVEL_KHR ? StructureType::TopLevel
-                                                                                       : StructureType::BottomLevel;
+    const StructureType type = structureTypeOf(info.type);
     const uint64_t total = primitiveTotal(job);
     const bool motion = usesMotionRecords(info);  // [NV-motion] MotionInstanceRecords / MotionTriangleRecords
     const VkGeometryTypeKHR primitiveType = recordPrimitiveType(info);

@@ -5,11 +5,6 @@
 
 namespace vkas {
 
-const VkAccelerationStructureGeometryKHR& buildGeometry(const VkAccelerationStructureBuildGeometryInfoKHR& info,
-                                                        uint32_t i) {
-    return info.pGeometries ? info.pGeometries[i] : *info.ppGeometries[i];
-}
-
 bool usesMotionRecords(const VkAccelerationStructureBuildGeometryInfoKHR& info) {
     if (!motion::isMotionBuild(info.flags)) return false;
     if (info.type == VK_ACCELERATION_STRUCTURE_TYPE_TOP_LEVEL_KHR) return true;
@@ -20,8 +15,8 @@ bool usesMotionRecords(const VkAccelerationStructureBuildGeometryInfoKHR& info) 
 VkGeometryTypeKHR recordPrimitiveType(const VkAccelerationStructureBuildGeometryInfoKHR& info) {
     if (info.type == VK_ACCELERATION_STRUCTURE_TYPE_TOP_LEVEL_KHR) return VK_GEOMETRY_TYPE_INSTANCES_KHR;
     // Read only through pointers that name a geometry (the sizes query and validation may see invalid ones).
-    if (info.geometryCount != 0 && (info.pGeometries || (info.ppGeometries && info.ppGeometries[0]))) {
-        const VkGeometryTypeKHR first = buildGeometry(info, 0).geometryType;
+    if (const auto* g0 = info.geometryCount != 0 ? geometryAt(info, 0) : nullptr) {
+        const VkGeometryTypeKHR first = g0->geometryType;
         if (first == VK_GEOMETRY_TYPE_AABBS_KHR || first == VK_GEOMETRY_TYPE_SPHERES_NV ||
             first == VK_GEOMETRY_TYPE_LINEAR_SWEPT_SPHERES_NV)
             return first;
