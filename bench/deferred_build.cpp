@@ -5,6 +5,8 @@
 // threads; PREFER_FAST_TRACE = 1, e.g. 8 for PREFER_FAST_BUILD, 0 for the default)
 #include <vkas/vkas.h>
 
+#include "device_commands.hpp"  // kit/
+
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -15,18 +17,6 @@
 #include <vector>
 
 namespace {
-
-struct Commands {
-#define CMD(name) PFN_##name name = nullptr;
-#define VKAS_BENCH_COMMANDS(X)                                                                                  \
-    X(vkCreateBuffer) X(vkGetBufferMemoryRequirements) X(vkAllocateMemory) X(vkBindBufferMemory)               \
-    X(vkGetAccelerationStructureBuildSizesKHR) X(vkCreateAccelerationStructureKHR)                               \
-    X(vkBuildAccelerationStructuresKHR) X(vkCreateDeferredOperationKHR) X(vkDeferredOperationJoinKHR)            \
-    X(vkGetDeferredOperationResultKHR) X(vkDestroyDeferredOperationKHR) X(vkMapMemory)                          \
-    X(vkDestroyAccelerationStructureKHR) X(vkDestroyBuffer) X(vkFreeMemory)
-    VKAS_BENCH_COMMANDS(CMD)
-#undef CMD
-};
 
 double msSince(std::chrono::steady_clock::time_point t0) {
     return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
@@ -41,10 +31,8 @@ int main(int argc, char** argv) {
                                      : VkBuildAccelerationStructureFlagsKHR(VK_BUILD_ACCELERATION_STRUCTURE_PREFER_FAST_TRACE_BIT_KHR);
     VkDevice dev;
     if (vkasCreateDevice(nullptr, &dev) != VK_SUCCESS) return 1;
-    Commands vk;
-#define LOAD(name) vk.name = reinterpret_cast<PFN_##name>(vkasGetDeviceProcAddr(dev, #name));
-    VKAS_BENCH_COMMANDS(LOAD)
-#undef LOAD
+    vkas_kit::Commands vk;
+    vk.load(dev);
 
     // A bumpy sphere: (n + 1) x (2n + 1) vertices, 4 n^2 triangles.
     std::vector<float> v;

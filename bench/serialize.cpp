@@ -5,6 +5,8 @@
 // Usage: vkas_bench_serialize [N] [repetitions]   (default 512: 1,048,576 triangles; 9 repetitions)
 #include <vkas/vkas.h>
 
+#include "device_commands.hpp"  // kit/
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -20,22 +22,7 @@ double msSince(std::chrono::steady_clock::time_point t0) {
     return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 }
 
-struct Vk {
-#define VKAS_BENCH_FN(name) PFN_##name name = nullptr;
-#define VKAS_BENCH_FNS(X)                                                                                         \
-    X(vkCreateBuffer) X(vkGetBufferMemoryRequirements) X(vkAllocateMemory) X(vkBindBufferMemory)                  \
-    X(vkGetAccelerationStructureBuildSizesKHR) X(vkCreateAccelerationStructureKHR)                                \
-    X(vkBuildAccelerationStructuresKHR) X(vkDestroyAccelerationStructureKHR) X(vkDestroyBuffer) X(vkFreeMemory)   \
-    X(vkCopyAccelerationStructureToMemoryKHR) X(vkCopyMemoryToAccelerationStructureKHR)                           \
-    X(vkWriteAccelerationStructuresPropertiesKHR) X(vkGetAccelerationStructureDeviceAddressKHR)
-    VKAS_BENCH_FNS(VKAS_BENCH_FN)
-#undef VKAS_BENCH_FN
-    explicit Vk(VkDevice dev) {
-#define VKAS_BENCH_GET(name) name = reinterpret_cast<PFN_##name>(vkasGetDeviceProcAddr(dev, #name));
-        VKAS_BENCH_FNS(VKAS_BENCH_GET)
-#undef VKAS_BENCH_GET
-    }
-};
+using Vk = vkas_kit::Commands;
 
 void check(VkResult r, const char* what) {
     if (r != VK_SUCCESS) {
@@ -149,7 +136,8 @@ void run(bool validation, int n, int reps) {
     dci.disableValidation = validation ? VK_FALSE : VK_TRUE;
     VkDevice dev;
     if (vkasCreateDevice(&dci, &dev) != VK_SUCCESS) std::exit(1);
-    const Vk vk(dev);
+    Vk vk;
+    vk.load(dev);
     std::vector<float> v;
     std::vector<uint32_t> idx;
     std::mt19937 rng(1);

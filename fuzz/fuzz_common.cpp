@@ -51,17 +51,20 @@ VkBool32 Device::messenger(VkDebugUtilsMessageSeverityFlagBitsEXT, VkDebugUtilsM
 
 Device::Device(bool validation_) : validation(validation_) {
     verbose_ = std::getenv("VKAS_FUZZ_VERBOSE") != nullptr;
-    VkasDeviceCreateInfo ci{};
-    ci.disableValidation = validation ? VK_FALSE : VK_TRUE;
-    ci.pfnMessenger = &Device::messenger;
-    ci.pMessengerUserData = this;
-    ci.workerThreadCount = 1;
-    FZ_CHECK(vkasCreateDevice(&ci, &device) == VK_SUCCESS, "vkasCreateDevice");
-#define FZ_LOAD(name)                                                                              \
-    name = reinterpret_cast<PFN_##name>(vkasGetDeviceProcAddr(device, #name));                     \
-    FZ_CHECK(name != nullptr, "vkasGetDeviceProcAddr(%s)", #name);
-    FZ_COMMANDS(FZ_LOAD)
-#undef FZ_LOAD
+    vkas_kit::DeviceOptions options;
+    options.validation = validation;
+    options.workerThreads = 1;
+    options.messenger = &Device::messenger;
+    options.messengerUserData = this;
+    try {
+        kit_.emplace(options);
+    } catch (const vkas_kit::DeviceError& e) {
+        fail("vkasCreateDevice returned %d\n", int(e.result()));
+    } catch (const vkas_kit::MissingCommand& e) {
+        fail("vkasGetDeviceProcAddr(%s) returned NULL\n", e.command().c_str());
+    }
+    device = kit_->handle();
+    static_cast<vkas_kit::Commands&>(*this) = kit_->commands();
 
     // Real structures of every kind, for references in fuzzed data.
     {
@@ -222,7 +225,6 @@ Device::Device(bool validation_) : validation(validation_) {
 Device::~Device() {
     for (Structure* s : {&blasTriangles, &blasAabbs, &blasSpheres, &blasLss, &tlas, &blasMotion, &tlasMotion, &unbuilt})
         destroyStructure(*s);
-    vkasDestroyDevice(device);
 }
 
 Buffer Device::createBuffer(VkDeviceSize size, uint8_t poison) {

@@ -1,10 +1,13 @@
 // Shared pieces of the vkas fuzz targets (docs/FUZZING.md): devices created once per process through the public
 // API, buffers and acceleration structures made the way an application makes them, a few real structures that
 // fuzzed data may reference, and a tracer that runs ray queries and batch traces over whatever was accepted.
-// Everything goes through <vkas/vkas.h> and vkasGetDeviceProcAddr; nothing here includes vkas's sources.
+// Everything goes through <vkas/vkas.h> and vkasGetDeviceProcAddr (the device and its commands: vkas_kit, kit/);
+// nothing here includes vkas's sources.
 #pragma once
 
 #include <vkas/vkas.h>
+
+#include "device.hpp"  // kit/
 
 #include <atomic>
 #include <cstddef>
@@ -12,6 +15,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <optional>
 #include <vector>
 
 namespace fz {
@@ -23,29 +27,6 @@ namespace fz {
     do {                                                                                                       \
         if (!(cond)) ::fz::fail("%s:%d: check `%s` failed: " fmt "\n", __FILE__, __LINE__, #cond, ##__VA_ARGS__); \
     } while (0)
-
-#define FZ_COMMANDS(X)                              \
-    X(vkCreateBuffer)                               \
-    X(vkDestroyBuffer)                              \
-    X(vkGetBufferMemoryRequirements)                \
-    X(vkAllocateMemory)                             \
-    X(vkFreeMemory)                                 \
-    X(vkBindBufferMemory)                           \
-    X(vkMapMemory)                                  \
-    X(vkGetAccelerationStructureBuildSizesKHR)      \
-    X(vkCreateAccelerationStructureKHR)             \
-    X(vkDestroyAccelerationStructureKHR)            \
-    X(vkGetAccelerationStructureDeviceAddressKHR)   \
-    X(vkBuildAccelerationStructuresKHR)             \
-    X(vkCopyAccelerationStructureKHR)               \
-    X(vkCopyAccelerationStructureToMemoryKHR)       \
-    X(vkCopyMemoryToAccelerationStructureKHR)       \
-    X(vkWriteAccelerationStructuresPropertiesKHR)   \
-    X(vkGetDeviceAccelerationStructureCompatibilityKHR) \
-    X(vkCreateDeferredOperationKHR)                 \
-    X(vkDestroyDeferredOperationKHR)                \
-    X(vkDeferredOperationJoinKHR)                   \
-    X(vkGetDeferredOperationResultKHR)
 
 struct Buffer {
     VkBuffer buffer = VK_NULL_HANDLE;
@@ -75,7 +56,8 @@ struct Region {
     ~Region();
 };
 
-class Device {
+// The commands (vkCreateBuffer etc.) are vkas_kit::Commands'.
+class Device : public vkas_kit::Commands {
 public:
     explicit Device(bool validation);
     ~Device();
@@ -84,9 +66,6 @@ public:
 
     VkDevice device = VK_NULL_HANDLE;
     const bool validation;
-#define FZ_DECLARE(name) PFN_##name name = nullptr;
-    FZ_COMMANDS(FZ_DECLARE)
-#undef FZ_DECLARE
 
     // Validation messages reported by this device so far (every one counted; printed when VKAS_FUZZ_VERBOSE is set).
     uint64_t messages() const { return messages_.load(); }
@@ -126,6 +105,7 @@ private:
                                                     const VkDebugUtilsMessengerCallbackDataEXT* data, void* user);
     std::atomic<uint64_t> messages_{0};
     bool verbose_ = false;
+    std::optional<vkas_kit::Device> kit_;  // created last: the messenger may run while it is created
 };
 
 // The two devices of a fuzz process, created on first use: validation on (messages counted) and off.

@@ -13,6 +13,8 @@
 
 #include <vkas/vkas.h>
 
+#include "device_commands.hpp"  // kit/
+
 #include <embree3/rtcore.h>
 #include <oneapi/tbb/task_arena.h>
 
@@ -340,14 +342,8 @@ void check(VkResult r, const char* what) {
     if (r != VK_SUCCESS) throw std::runtime_error(std::string("vkas: ") + what + " failed (" + std::to_string(int(r)) + ")");
 }
 
-#define ALPHA_VK_COMMANDS(X)                                                                                          \
-    X(vkCreateBuffer) X(vkDestroyBuffer) X(vkGetBufferMemoryRequirements) X(vkAllocateMemory) X(vkFreeMemory)         \
-    X(vkBindBufferMemory) X(vkGetAccelerationStructureBuildSizesKHR) X(vkCreateAccelerationStructureKHR)              \
-    X(vkDestroyAccelerationStructureKHR) X(vkBuildAccelerationStructuresKHR) X(vkWriteAccelerationStructuresPropertiesKHR)
-#define ALPHA_MICROMAP_COMMANDS(X) \
-    X(vkCreateMicromapEXT) X(vkDestroyMicromapEXT) X(vkGetMicromapBuildSizesEXT) X(vkBuildMicromapsEXT) X(vkWriteMicromapsPropertiesEXT)
-
-class Vkas {
+// The commands (vkCreateBuffer etc.; the micromap ones NULL when missing) are vkas_kit::Commands' (kit/).
+class Vkas : public vkas_kit::Commands {
 public:
     struct Memory {
         VkBuffer buffer = VK_NULL_HANDLE;
@@ -371,10 +367,7 @@ public:
         ci.disableValidation = validate ? VK_FALSE : VK_TRUE;
         ci.workerThreadCount = threads;
         check(vkasCreateDevice(&ci, &dev_), "vkasCreateDevice");
-#define ALPHA_LOAD(name) name = reinterpret_cast<PFN_##name>(vkasGetDeviceProcAddr(dev_, #name));
-        ALPHA_VK_COMMANDS(ALPHA_LOAD)
-        ALPHA_MICROMAP_COMMANDS(ALPHA_LOAD)
-#undef ALPHA_LOAD
+        load(dev_);
     }
     ~Vkas() {
         for (Structure& s : structures_) {
@@ -545,12 +538,6 @@ private:
     VkDevice dev_ = VK_NULL_HANDLE;
     std::vector<Structure> structures_;
     std::vector<Micromap> micromaps_;
-
-public:
-#define ALPHA_DECLARE(name) PFN_##name name = nullptr;
-    ALPHA_VK_COMMANDS(ALPHA_DECLARE)
-    ALPHA_MICROMAP_COMMANDS(ALPHA_DECLARE)
-#undef ALPHA_DECLARE
 };
 
 // vkasTraceRays: closest hit, or any hit (ANY_HIT mode) for segments. Returns the time in ms.

@@ -56,31 +56,23 @@ VKAPI_ATTR VkBool32 VKAPI_CALL Device::messenger(VkDebugUtilsMessageSeverityFlag
 }
 
 Device::Device(uint32_t workerThreads) {
-    VkasDeviceCreateInfo ci{};
-    ci.disableValidation = VK_FALSE;
-    ci.pfnMessenger = &Device::messenger;
-    ci.pMessengerUserData = this;
-    ci.workerThreadCount = workerThreads;
-    expect(vkasCreateDevice(&ci, &handle), VK_SUCCESS, "vkasCreateDevice");
-#define HK_LOAD(name)                                                                              \
-    name = reinterpret_cast<PFN_##name>(vkasGetDeviceProcAddr(handle, #name));                     \
-    if (!name) fail("vkasGetDeviceProcAddr(" #name ") is NULL");
-#define HK_LOAD_VK(name)                                                                           \
-    vk.name = reinterpret_cast<PFN_##name>(vkasGetDeviceProcAddr(handle, #name));                  \
-    if (!vk.name) fail("vkasGetDeviceProcAddr(" #name ") is NULL");
-    VT_DEVICE_COMMANDS(HK_LOAD_VK)
-    HK_LOAD(vkCreateDeferredOperationKHR)
-    HK_LOAD(vkDestroyDeferredOperationKHR)
-    HK_LOAD(vkGetDeferredOperationMaxConcurrencyKHR)
-    HK_LOAD(vkGetDeferredOperationResultKHR)
-    HK_LOAD(vkDeferredOperationJoinKHR)
-#undef HK_LOAD
-#undef HK_LOAD_VK
+    vkas_kit::DeviceOptions options;
+    options.validation = true;
+    options.workerThreads = workerThreads;
+    options.messenger = &Device::messenger;
+    options.messengerUserData = this;
+    try {
+        device_.emplace(options);
+    } catch (const vkas_kit::DeviceError& e) {
+        expect(e.result(), VK_SUCCESS, "vkasCreateDevice");
+    } catch (const vkas_kit::MissingCommand& e) {
+        fail("vkasGetDeviceProcAddr(" + e.command() + ") is NULL");
+    }
+    handle = device_->handle();
+    vk = device_->commands();
 }
 
-Device::~Device() {
-    if (handle != VK_NULL_HANDLE) vkasDestroyDevice(handle);
-}
+Device::~Device() = default;
 
 std::vector<std::string> Device::takeErrors() {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -220,11 +212,11 @@ void runDeferred(Device& d, uint32_t join, const std::function<VkResult(VkDeferr
         return;
     }
     VkDeferredOperationKHR op = VK_NULL_HANDLE;
-    expect(&d, d.vkCreateDeferredOperationKHR(d.handle, nullptr, &op), VK_SUCCESS, "vkCreateDeferredOperationKHR");
+    expect(&d, d.vk.vkCreateDeferredOperationKHR(d.handle, nullptr, &op), VK_SUCCESS, "vkCreateDeferredOperationKHR");
     struct Guard {
         Device& d;
         VkDeferredOperationKHR op;
-        ~Guard() { d.vkDestroyDeferredOperationKHR(d.handle, op, nullptr); }
+        ~Guard() { d.vk.vkDestroyDeferredOperationKHR(d.handle, op, nullptr); }
     } guard{d, op};
     const VkResult r = command(op);
     if (r == VK_OPERATION_NOT_DEFERRED_KHR || r == VK_SUCCESS) return;
@@ -232,7 +224,7 @@ void runDeferred(Device& d, uint32_t join, const std::function<VkResult(VkDeferr
     std::vector<VkResult> results(join, VK_ERROR_UNKNOWN);
     parallel(join, [&](uint32_t t) {
         VkResult j;
-        while ((j = d.vkDeferredOperationJoinKHR(d.handle, op)) == VK_THREAD_IDLE_KHR) std::this_thread::yield();
+        while ((j = d.vk.vkDeferredOperationJoinKHR(d.handle, op)) == VK_THREAD_IDLE_KHR) std::this_thread::yield();
         results[t] = j;
     });
     uint32_t successes = 0;
@@ -242,7 +234,7 @@ void runDeferred(Device& d, uint32_t join, const std::function<VkResult(VkDeferr
         successes += j == VK_SUCCESS;
     }
     if (successes == 0) fail(std::string(what) + ": no joined thread saw the operation complete");
-    expect(&d, d.vkGetDeferredOperationResultKHR(d.handle, op), VK_SUCCESS, what);
+    expect(&d, d.vk.vkGetDeferredOperationResultKHR(d.handle, op), VK_SUCCESS, what);
 }
 
 // ---- Builds -----------------------------------------------------------------------------------------------------

@@ -12,11 +12,13 @@
 // copy from) while no thread writes it.
 #pragma once
 
+#include "device.hpp"  // kit/
 #include "vkas_test.hpp"
 
 #include <functional>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -46,12 +48,7 @@ class Device {
     Device& operator=(const Device&) = delete;
 
     VkDevice handle = VK_NULL_HANDLE;
-    vt::Commands vk;
-    PFN_vkCreateDeferredOperationKHR vkCreateDeferredOperationKHR = nullptr;
-    PFN_vkDestroyDeferredOperationKHR vkDestroyDeferredOperationKHR = nullptr;
-    PFN_vkGetDeferredOperationMaxConcurrencyKHR vkGetDeferredOperationMaxConcurrencyKHR = nullptr;
-    PFN_vkGetDeferredOperationResultKHR vkGetDeferredOperationResultKHR = nullptr;
-    PFN_vkDeferredOperationJoinKHR vkDeferredOperationJoinKHR = nullptr;
+    vkas_kit::Commands vk;  // kit/device_commands.hpp (the deferred-operation commands included)
 
     // Validation errors reported so far (and cleared).
     std::vector<std::string> takeErrors();
@@ -64,6 +61,7 @@ class Device {
                                                     const VkDebugUtilsMessengerCallbackDataEXT* data, void* user);
     std::mutex mutex_;
     std::vector<std::string> errors_;
+    std::optional<vkas_kit::Device> device_;  // created last: the messenger may run while it is created
 };
 
 // A structure with its own buffer and memory (memory type 0, mapped), destroyed with it.

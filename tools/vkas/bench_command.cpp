@@ -14,10 +14,10 @@
 #include "progress.hpp"
 #include "structure_file.hpp"
 
-#include "rays.hpp"       // bench/vs_embree: camera, diffuse and shadow rays
-#include "vkas_side.hpp"  // bench/vs_embree: vkas builds, refits and traversal
+#include "rays.hpp"       // kit/measure: camera, diffuse and shadow rays
+#include "vkas_side.hpp"  // kit/measure: vkas builds, refits and traversal
 #if VKAS_TOOL_WITH_EMBREE
-#include "embree_side.hpp"  // bench/vs_embree: the same measurements with Embree 3
+#include "embree_side.hpp"  // kit/measure: the same measurements with Embree 3
 #endif
 
 namespace vkas_tool {

@@ -1,6 +1,6 @@
 // `vkas bench FILE...`: the files' triangles (node transforms applied) as one mesh; build times for each
 // preference (one thread and all threads), refit, compaction, and trace rates of camera, diffuse and shadow rays
-// with one and all threads, as a table or --json. The measuring code is bench/vs_embree's (VkasEngine, the ray
+// with one and all threads, as a table or --json. The measuring code is kit/measure (VkasEngine, the ray
 // generators, EmbreeEngine): when the tool is built with Embree, every row has Embree's number beside vkas's.
 #pragma once
 

@@ -32,47 +32,22 @@ VKAPI_ATTR VkBool32 VKAPI_CALL VkContext::messenger(VkDebugUtilsMessageSeverityF
     return VK_FALSE;
 }
 
-template <typename Pfn>
-void VkContext::load(Pfn& pfn, const char* name) {
-    pfn = reinterpret_cast<Pfn>(vkasGetDeviceProcAddr(device_, name));
-    if (!pfn) throw VkError(std::string("vkasGetDeviceProcAddr(\"") + name + "\")", VK_ERROR_FEATURE_NOT_PRESENT);
-}
-
 VkContext::VkContext(const DeviceOptions& options) : collectMessages_(options.collectMessages) {
-    VkasDeviceCreateInfo info{};
-    info.disableValidation = options.validation ? VK_FALSE : VK_TRUE;
-    info.pfnMessenger = &VkContext::messenger;
-    info.pMessengerUserData = this;
-    info.workerThreadCount = options.workerThreads;
-    check(vkasCreateDevice(&info, &device_), "vkasCreateDevice");
+    vkas_kit::DeviceOptions kit;
+    kit.validation = options.validation;
+    kit.workerThreads = options.workerThreads;
+    kit.messenger = &VkContext::messenger;
+    kit.messengerUserData = this;
     try {
-        load(vkCreateBuffer, "vkCreateBuffer");
-        load(vkDestroyBuffer, "vkDestroyBuffer");
-        load(vkGetBufferMemoryRequirements, "vkGetBufferMemoryRequirements");
-        load(vkAllocateMemory, "vkAllocateMemory");
-        load(vkFreeMemory, "vkFreeMemory");
-        load(vkBindBufferMemory, "vkBindBufferMemory");
-        load(vkMapMemory, "vkMapMemory");
-        load(vkUnmapMemory, "vkUnmapMemory");
-        load(vkGetBufferDeviceAddress, "vkGetBufferDeviceAddress");
-        load(vkGetAccelerationStructureBuildSizesKHR, "vkGetAccelerationStructureBuildSizesKHR");
-        load(vkCreateAccelerationStructureKHR, "vkCreateAccelerationStructureKHR");
-        load(vkDestroyAccelerationStructureKHR, "vkDestroyAccelerationStructureKHR");
-        load(vkGetAccelerationStructureDeviceAddressKHR, "vkGetAccelerationStructureDeviceAddressKHR");
-        load(vkBuildAccelerationStructuresKHR, "vkBuildAccelerationStructuresKHR");
-        load(vkWriteAccelerationStructuresPropertiesKHR, "vkWriteAccelerationStructuresPropertiesKHR");
-        load(vkCopyAccelerationStructureKHR, "vkCopyAccelerationStructureKHR");
-        load(vkCopyAccelerationStructureToMemoryKHR, "vkCopyAccelerationStructureToMemoryKHR");
-        load(vkCopyMemoryToAccelerationStructureKHR, "vkCopyMemoryToAccelerationStructureKHR");
-        load(vkGetDeviceAccelerationStructureCompatibilityKHR, "vkGetDeviceAccelerationStructureCompatibilityKHR");
-    } catch (...) {
-        vkasDestroyDevice(device_);
-        throw;
+        device_.emplace(kit);
+    } catch (const vkas_kit::DeviceError& e) {
+        throw VkError("vkasCreateDevice", e.result());
+    } catch (const vkas_kit::MissingCommand& e) {
+        throw VkError("vkasGetDeviceProcAddr(\"" + e.command() + "\")", VK_ERROR_FEATURE_NOT_PRESENT);
     }
+    static_cast<vkas_kit::Commands&>(*this) = device_->commands();
 }
 
-VkContext::~VkContext() {
-    if (device_ != VK_NULL_HANDLE) vkasDestroyDevice(device_);
-}
+VkContext::~VkContext() = default;
 
 }  // namespace vkas_tool

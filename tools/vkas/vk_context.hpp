@@ -1,10 +1,13 @@
-// The tool's vkas device and the Vulkan commands it fetched with vkasGetDeviceProcAddr.
+// The tool's vkas device and the Vulkan commands it fetched with vkasGetDeviceProcAddr (both from vkas_kit, kit/).
 #pragma once
 
+#include <optional>
 #include <stdexcept>
 #include <string>
 
 #include <vkas/vkas.h>
+
+#include "device.hpp"  // kit/
 
 namespace vkas_tool {
 
@@ -28,52 +31,29 @@ struct DeviceOptions {
                                   // reports a bad file in one message of its own
 };
 
-// Owns a vkas device and its command table. Not copyable.
-class VkContext {
+// Owns a vkas device and its command table (the members vkCreateBuffer etc., vkas_kit::Commands). Not copyable.
+class VkContext : public vkas_kit::Commands {
 public:
     explicit VkContext(const DeviceOptions& options);
     ~VkContext();
     VkContext(const VkContext&) = delete;
     VkContext& operator=(const VkContext&) = delete;
 
-    VkDevice device() const { return device_; }
+    VkDevice device() const { return device_->handle(); }
     // Validation messages reported through the messenger so far.
     uint32_t validationMessages() const { return validationMessages_; }
     // The last message when DeviceOptions::collectMessages is set ("" when none).
     const std::string& lastMessage() const { return lastMessage_; }
-
-    PFN_vkCreateBuffer vkCreateBuffer = nullptr;
-    PFN_vkDestroyBuffer vkDestroyBuffer = nullptr;
-    PFN_vkGetBufferMemoryRequirements vkGetBufferMemoryRequirements = nullptr;
-    PFN_vkAllocateMemory vkAllocateMemory = nullptr;
-    PFN_vkFreeMemory vkFreeMemory = nullptr;
-    PFN_vkBindBufferMemory vkBindBufferMemory = nullptr;
-    PFN_vkMapMemory vkMapMemory = nullptr;
-    PFN_vkUnmapMemory vkUnmapMemory = nullptr;
-    PFN_vkGetBufferDeviceAddress vkGetBufferDeviceAddress = nullptr;
-    PFN_vkGetAccelerationStructureBuildSizesKHR vkGetAccelerationStructureBuildSizesKHR = nullptr;
-    PFN_vkCreateAccelerationStructureKHR vkCreateAccelerationStructureKHR = nullptr;
-    PFN_vkDestroyAccelerationStructureKHR vkDestroyAccelerationStructureKHR = nullptr;
-    PFN_vkGetAccelerationStructureDeviceAddressKHR vkGetAccelerationStructureDeviceAddressKHR = nullptr;
-    PFN_vkBuildAccelerationStructuresKHR vkBuildAccelerationStructuresKHR = nullptr;
-    PFN_vkWriteAccelerationStructuresPropertiesKHR vkWriteAccelerationStructuresPropertiesKHR = nullptr;
-    PFN_vkCopyAccelerationStructureKHR vkCopyAccelerationStructureKHR = nullptr;
-    PFN_vkCopyAccelerationStructureToMemoryKHR vkCopyAccelerationStructureToMemoryKHR = nullptr;
-    PFN_vkCopyMemoryToAccelerationStructureKHR vkCopyMemoryToAccelerationStructureKHR = nullptr;
-    PFN_vkGetDeviceAccelerationStructureCompatibilityKHR vkGetDeviceAccelerationStructureCompatibilityKHR = nullptr;
 
 private:
     static VKAPI_ATTR VkBool32 VKAPI_CALL messenger(VkDebugUtilsMessageSeverityFlagBitsEXT severity,
                                                     VkDebugUtilsMessageTypeFlagsEXT types,
                                                     const VkDebugUtilsMessengerCallbackDataEXT* data,
                                                     void* userData);
-    template <typename Pfn>
-    void load(Pfn& pfn, const char* name);
-
-    VkDevice device_ = VK_NULL_HANDLE;
     uint32_t validationMessages_ = 0;
     bool collectMessages_ = false;
     std::string lastMessage_;
+    std::optional<vkas_kit::Device> device_;  // created last: the messenger may run while it is created
 };
 
 }  // namespace vkas_tool

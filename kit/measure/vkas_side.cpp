@@ -63,17 +63,14 @@ VkAccelerationStructureGeometryKHR instances(const std::vector<VkAccelerationStr
 
 }  // namespace
 
-VkasEngine::VkasEngine(uint32_t workerThreadCount, bool validation) {
-    VkasDeviceCreateInfo ci{};
-    ci.disableValidation = validation ? VK_FALSE : VK_TRUE;
-    ci.workerThreadCount = workerThreadCount;
-    check(vkasCreateDevice(&ci, &dev_), "vkasCreateDevice");
-#define VB_LOAD(name) name = reinterpret_cast<PFN_##name>(vkasGetDeviceProcAddr(dev_, #name));
-    VB_VKAS_COMMANDS(VB_LOAD)
-#undef VB_LOAD
+VkasEngine::VkasEngine(uint32_t workerThreadCount, bool validation) try
+    : device_(vkas_kit::DeviceOptions{validation, workerThreadCount}), dev_(device_.handle()) {
+    static_cast<vkas_kit::Commands&>(*this) = device_.commands();
+} catch (const vkas_kit::DeviceError&) {
+    throw std::runtime_error("vkas: vkasCreateDevice failed");
 }
 
-VkasEngine::~VkasEngine() { vkasDestroyDevice(dev_); }
+VkasEngine::~VkasEngine() = default;
 
 VkasEngine::Structure VkasEngine::create(VkAccelerationStructureTypeKHR type, VkDeviceSize size) {
     Structure s;

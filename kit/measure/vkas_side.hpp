@@ -4,6 +4,7 @@
 #pragma once
 
 #include "common.hpp"
+#include "device.hpp"  // kit/: the device and its commands
 #include "sah.hpp"
 
 namespace vb {
@@ -15,7 +16,7 @@ VkAccelerationStructureGeometryKHR triangleGeometry(const Mesh& mesh, const floa
 std::vector<VkAccelerationStructureInstanceKHR> instanceRecords(const std::vector<Transform>& xs,
                                                                 VkAccelerationStructureKHR blas);
 
-class VkasEngine {
+class VkasEngine : private vkas_kit::Commands {
 public:
     struct Structure {
         VkAccelerationStructureKHR as = VK_NULL_HANDLE;
@@ -81,18 +82,9 @@ private:
     uint64_t compactedSize(const Structure& s);
     uint64_t structureSize(const Structure& s);  // 0 when the query fails
 
+    vkas_kit::Device device_;
     VkDevice dev_ = VK_NULL_HANDLE;
     std::vector<unsigned char> scratch_;
-#define VB_VKAS_COMMANDS(X)                                                                                        \
-    X(vkCreateBuffer) X(vkGetBufferMemoryRequirements) X(vkAllocateMemory) X(vkBindBufferMemory) X(vkMapMemory)    \
-    X(vkUnmapMemory) X(vkGetAccelerationStructureBuildSizesKHR) X(vkCreateAccelerationStructureKHR)                \
-    X(vkBuildAccelerationStructuresKHR) X(vkWriteAccelerationStructuresPropertiesKHR)                             \
-    X(vkCreateDeferredOperationKHR) X(vkDeferredOperationJoinKHR) X(vkGetDeferredOperationResultKHR)               \
-    X(vkDestroyDeferredOperationKHR) X(vkDestroyAccelerationStructureKHR) X(vkDestroyBuffer) X(vkFreeMemory)       \
-    X(vkCopyAccelerationStructureToMemoryKHR) X(vkCopyMemoryToAccelerationStructureKHR)
-#define VB_DECLARE(name) PFN_##name name = nullptr;
-    VB_VKAS_COMMANDS(VB_DECLARE)
-#undef VB_DECLARE
 };
 
 }  // namespace vb
