@@ -1,6 +1,6 @@
 // libFuzzer target over the vkas tool's mesh files (docs/FUZZING.md): the first byte picks the file's extension (OBJ,
 // PLY, STL, OFF, glTF, GLB, 3DS: the formats docs/CLI.md names), the rest is the file. It goes through the tool's own
-// loading code (tools/vkas/model_loader.cpp: the header check; in a child process assimp with no post-processing,
+// loading code (tools/vkas/mesh_files/model_loader.cpp: the header check; in a child process assimp with no post-processing,
 // the scene check of imported_scene_check.cpp and assimp's steps; the child's result decoded and checked), and what loads is built as `vkas render` builds it: one bottom
 // level per mesh and a top level over the instances, through the public API with validation on.
 //

@@ -1,4 +1,4 @@
-// The byte form in which the vkas tool's importer process hands a mesh file's scene back (tools/vkas/imported_model.hpp):
+// The byte form in which the vkas tool's importer process hands a mesh file's scene back (tools/vkas/mesh_files/imported_model.hpp):
 // what is encoded decodes to the same model; a result cut short anywhere, or with bytes changed, is refused with an
 // exception or decodes to a model whose instances name meshes and materials it has, never a crash (ASan checks the reads).
 #include <gtest/gtest.h>
