@@ -135,7 +135,7 @@ TEST_F(NodeTest, sse_matches_the_scalar_rule_and_never_rejects_a_crossed_box) {
 }
 
 TEST_F(NodeTest, avx2_lanes_equal_sse_lanes_bit_for_bit) {
-#if VKAS_NODE_TEST_AVX2
+#if VKAS_NODE_INTERSECTOR_AVX2
     if (!__builtin_cpu_supports("avx2")) GTEST_SKIP() << "this CPU has no AVX2";
     for (int iter = 0; iter < 20000; ++iter) {
         alignas(64) const Node node = randomNode();
@@ -162,7 +162,7 @@ TEST_F(NodeTest, avx2_lanes_equal_sse_lanes_bit_for_bit) {
 // and each lane of the AVX-512 test also what the scalar rule gives (the AVX-512 kernel's node test must not be an
 // instruction set of its own: Embree's AVX2 and AVX-512 paths disagree, its issue #520).
 TEST_F(NodeTest, avx512_lanes_equal_sse_and_avx2_lanes_bit_for_bit) {
-#if VKAS_NODE_TEST_AVX512
+#if VKAS_NODE_INTERSECTOR_AVX512
     if (!__builtin_cpu_supports("avx512f") || !__builtin_cpu_supports("avx512vl"))
         GTEST_SKIP() << "this CPU has no AVX-512F/VL";
     for (int iter = 0; iter < 20000; ++iter) {

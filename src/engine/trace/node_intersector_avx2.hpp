@@ -14,7 +14,7 @@
 
 #if defined(__x86_64__)
 #include <immintrin.h>
-#define VKAS_NODE_TEST_AVX2 1
+#define VKAS_NODE_INTERSECTOR_AVX2 1
 
 namespace vkas {
 

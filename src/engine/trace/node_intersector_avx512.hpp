@@ -13,9 +13,9 @@
 #include "engine/trace/node_intersector_avx2.hpp"
 #include "engine/trace/ray.hpp"
 
-#if VKAS_NODE_TEST_AVX2
+#if VKAS_NODE_INTERSECTOR_AVX2
 #include <immintrin.h>
-#define VKAS_NODE_TEST_AVX512 1
+#define VKAS_NODE_INTERSECTOR_AVX512 1
 
 namespace vkas {
 

@@ -178,7 +178,7 @@ inline uint32_t lanesEnteringChild(const format::Node& node, uint32_t slot, cons
 }
 
 #if defined(__x86_64__)
-#define VKAS_PACKET_TESTS_AVX2 1
+#define VKAS_PACKET_INTERSECTORS_AVX2 1
 // The same two tests in 8 lanes (AVX2, no FMA: the operations and so the results are those above).
 __attribute__((target("avx2"))) inline uint32_t packetChildEntriesAvx2(const format::Node& node,
                                                                        const PacketFrustum& f, float tMax,

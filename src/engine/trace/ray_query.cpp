@@ -47,7 +47,7 @@ inline uint32_t nodeTest(const Node& n, NodeRay r, float tMin, float tMax, float
 #include "engine/trace/ray_query_descent.hpp"
 }  // namespace baseline
 
-#if VKAS_NODE_TEST_AVX2
+#if VKAS_NODE_INTERSECTOR_AVX2
 #if defined(__clang__)
 #pragma clang attribute push(__attribute__((target("avx2"))), apply_to = function)
 #else
@@ -69,7 +69,7 @@ inline uint32_t nodeTest(const Node& n, const NodeRay& r, float tMin, float tMax
 #endif
 #endif
 
-#if VKAS_NODE_TEST_AVX512
+#if VKAS_NODE_INTERSECTOR_AVX512
 #if defined(__clang__)
 #pragma clang attribute push(__attribute__((target("avx2,avx512f,avx512vl"))), apply_to = function)
 #else
@@ -93,10 +93,10 @@ inline uint32_t nodeTest(const Node& n, const NodeRay& r, float tMin, float tMax
 
 // The node test of the instruction set the registry names (instruction_set.hpp), as the batch kernel takes its.
 DescendFn chooseDescend() {
-#if VKAS_NODE_TEST_AVX512
+#if VKAS_NODE_INTERSECTOR_AVX512
     if (traceInstructionSet() == TraceInstructionSet::Avx512) return avx512::descend;
 #endif
-#if VKAS_NODE_TEST_AVX2
+#if VKAS_NODE_INTERSECTOR_AVX2
     if (traceInstructionSet() >= TraceInstructionSet::Avx2) return avx2::descend;
 #endif
     return baseline::descend;
