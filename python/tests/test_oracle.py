@@ -232,3 +232,20 @@ def test_float64_inputs_are_converted_once(dev, rng):
     o64 = np.asfortranarray(o.astype(np.float64))
     assert s32.intersect(o64, d) == s32.intersect(o, d)
     assert s32.intersect(o.tolist(), d.tolist()) == s32.intersect(o, d)
+
+
+def test_inactive_instances_keep_their_ids(dev, dev_novalidation):
+    # None is an inactive instance (reference 0): it keeps its id and is never hit. Its record still holds a
+    # VkTransformMatrixKHR, which must be invertible (VUID-VkTransformMatrixKHR-matrix-03799) even where the instance
+    # is inactive, so a device with validation on accepts the list as one without it does.
+    tri = np.array([[-1, -1, 0], [1, -1, 0], [0, 1, 0]], np.float32)
+    for device in (dev, dev_novalidation):
+        blas = device.build_bottom_level([vkas.Triangles(tri)])
+        at = [np.hstack([np.eye(3), [[3.0 * k], [0], [0]]]) for k in range(3)]
+        tlas = device.build_top_level([vkas.Instance(blas, at[0]), None, vkas.Instance(blas, at[2])])
+        o = np.array([[3.0 * k, 0, 1] for k in range(3)], np.float32)
+        d = np.tile(np.array([[0, 0, -1]], np.float32), (3, 1))
+        hits = tlas.intersect(o, d)
+        np.testing.assert_array_equal(hits.instance_id, [0, -1, 2])
+        np.testing.assert_allclose(hits.t, [1, np.inf, 1])
+        assert tlas.instances[1] is None

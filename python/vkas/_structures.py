@@ -200,7 +200,10 @@ def _records(instances):
     rec = np.zeros(len(instances), dtype=_INSTANCE_DTYPE)
     for k, inst in enumerate(instances):
         if inst is None:
-            continue  # inactive: reference 0
+            # Inactive: reference 0. Its transform is still a VkTransformMatrixKHR, which must be invertible
+            # (VUID-VkTransformMatrixKHR-matrix-03799), whether or not the instance is active: the identity.
+            rec[k]["transform"] = _IDENTITY
+            continue
         rec[k]["transform"] = inst.transform
         rec[k]["custom_mask"] = inst.custom_index | (inst.mask << 24)
         rec[k]["sbt_flags"] = inst.sbt_offset | (int(inst.flags) << 24)
