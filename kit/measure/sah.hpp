@@ -17,7 +17,8 @@ struct SahCost {
     double cost() const { return rootArea > 0 ? (nodes + leaves) / rootArea : 0; }
 };
 
-// The SAH cost of a vkas structure from its bytes (docs/FORMAT.md: header, 8-wide nodes, leaf references).
+// The SAH cost of a vkas structure from its bytes, as engine/format/inspect.hpp reads them (the same walk and areas
+// as `vkas inspect`).
 SahCost vkasSah(const unsigned char* block);
 
 }  // namespace vb

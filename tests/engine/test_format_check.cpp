@@ -8,6 +8,7 @@
 #include "engine/assemble/size_query.hpp"
 #include "engine/assemble/structure_build.hpp"
 #include "engine/format/check.hpp"
+#include "engine/format/inspect.hpp"
 #include "engine/format/layout.hpp"
 #include "vkas_test.hpp"
 
@@ -67,6 +68,44 @@ struct FormatCheck : ::testing::Test {
 
 TEST_F(FormatCheck, a_built_structure_passes) {
     EXPECT_TRUE(format::checkBlock(block.data(), block.size()).ok()) << format::checkBlock(block.data(), block.size()).reason;
+}
+
+// The format's one reader for the tools (engine/format/inspect.hpp): its counts agree with the header and with a
+// walk of its own here, its bytes by part add up, and damaged blocks give a reason instead of reading past them.
+TEST_F(FormatCheck, inspection_reads_what_the_build_wrote) {
+    format::TreeInspection in;
+    ASSERT_EQ(format::inspectTree(block.data(), block.size(), in), nullptr);
+    const format::Header h = headerCopy();
+    EXPECT_EQ(in.internalNodes, h.nodeCount);
+    EXPECT_EQ(in.references, h.recordCount);  // no spatial splits: every record once
+    EXPECT_TRUE(in.triangleLeaves);
+    EXPECT_EQ(in.headerBytes + in.geometryBytes + in.nodeBytes + in.recordBytes + in.micromapBytes + in.fragmentBytes +
+                  in.paddingBytes,
+              h.usedSize);
+    uint64_t leaves = 0, sized = 0, children = 0;
+    for (uint64_t n : in.leavesAtDepth) leaves += n;
+    for (size_t n = 0; n < in.leafSizes.size(); ++n) sized += n * in.leafSizes[n];
+    for (size_t k = 0; k < in.childrenPerNode.size(); ++k) children += k * in.childrenPerNode[k];
+    EXPECT_EQ(leaves, in.leaves);
+    EXPECT_EQ(sized, in.references);
+    EXPECT_EQ(children, in.internalNodes - 1 + in.leaves);  // every node but the root and every leaf is a child
+    EXPECT_GT(in.sahCost(), 1.0);
+    std::vector<Aabb> level0;
+    ASSERT_EQ(format::boxesAtLevel(block.data(), block.size(), 0, level0), nullptr);
+    ASSERT_GE(in.nodesAtDepth.size(), 2u);
+    const uint64_t rootChildren = in.nodesAtDepth[1] + (in.leavesAtDepth.size() > 1 ? in.leavesAtDepth[1] : 0);
+    EXPECT_EQ(level0.size(), rootChildren);  // level 0: the root node's children
+    // Damage: short, wrong magic, a root past the nodes.
+    EXPECT_NE(format::inspectTree(block.data(), 100, in), nullptr);
+    std::vector<std::byte> copy = block;
+    format::Header d = h;
+    d.magic ^= 1;
+    std::memcpy(copy.data(), &d, sizeof d);
+    EXPECT_NE(format::inspectTree(copy.data(), copy.size(), in), nullptr);
+    d = h, d.root = format::makeInternalRef(h.nodeCount);
+    std::memcpy(copy.data(), &d, sizeof d);
+    format::TreeInspection damaged;
+    EXPECT_NE(format::inspectTree(copy.data(), copy.size(), damaged), nullptr);
 }
 
 TEST_F(FormatCheck, every_kind_of_damage_is_refused) {
