@@ -1149,9 +1149,7 @@ class operations_corrupt : public OperationsTest {
         VkasDeviceCreateInfo ci{};
         ci.disableValidation = VK_TRUE;
         ASSERT_EQ(vkasCreateDevice(&ci, &raw->device), VK_SUCCESS);
-#define VT_LOAD_RAW(name) raw->vk.name = reinterpret_cast<PFN_##name>(vkasGetDeviceProcAddr(raw->device, #name));
-        VT_DEVICE_COMMANDS(VT_LOAD_RAW)
-#undef VT_LOAD_RAW
+        raw->vk.load(raw->device);
     }
     void TearDown() override {
         raw.reset();

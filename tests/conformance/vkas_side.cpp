@@ -29,7 +29,7 @@ struct HostAllocation {
 
 struct VkasSide::Impl {
     VkDevice device = VK_NULL_HANDLE;
-    vt::Commands vk;  // the commands the test support loads (VT_DEVICE_COMMANDS)
+    vt::Commands vk;  // the commands of kit/device_commands.hpp
     std::mutex messagesMutex;
     std::string messages;
 
@@ -116,15 +116,13 @@ std::unique_ptr<VkasSide> VkasSide::create(std::string* why) {
         if (why) *why = "vkasCreateDevice returned " + std::to_string(r);
         return nullptr;
     }
-#define DIFF_LOAD(name)                                                                                      \
-    impl->vk.name = reinterpret_cast<PFN_##name>(vkasGetDeviceProcAddr(impl->device, #name));               \
-    if (!impl->vk.name) {                                                                                    \
-        if (why) *why = "vkasGetDeviceProcAddr returned NULL for " #name;                                    \
-        vkasDestroyDevice(impl->device);                                                                     \
-        return nullptr;                                                                                      \
+try {
+        impl->vk.load(impl->device);
+    } catch (const vkas_kit::MissingCommand& e) {
+        if (why) *why = "vkasGetDeviceProcAddr returned NULL for " + e.command();
+        vkasDestroyDevice(impl->device);
+        return nullptr;
     }
-    VT_DEVICE_COMMANDS(DIFF_LOAD)
-#undef DIFF_LOAD
     return std::unique_ptr<VkasSide>(new VkasSide(std::move(impl)));
 }
 

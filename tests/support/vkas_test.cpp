@@ -328,11 +328,11 @@ void VkasTest::SetUp() {
     else
         ASSERT_EQ(vkasCreateDevice(&ci, &device), VK_SUCCESS);
     ASSERT_NE(device, VK_NULL_HANDLE);
-#define VT_LOAD(name)                                                                     \
-    vk.name = reinterpret_cast<PFN_##name>(vkasGetDeviceProcAddr(device, #name));          \
-    ASSERT_NE(reinterpret_cast<void*>(vk.name), nullptr) << "vkasGetDeviceProcAddr(" #name ") is NULL";
-    VT_DEVICE_COMMANDS(VT_LOAD)
-#undef VT_LOAD
+    try {
+        vk.load(device);
+    } catch (const vkas_kit::MissingCommand& e) {
+        FAIL() << "vkasGetDeviceProcAddr(" << e.command() << ") is NULL";
+    }
 }
 
 void VkasTest::TearDown() {

@@ -7,6 +7,8 @@
 #include <gtest/gtest.h>
 #include <vkas/vkas.h>
 
+#include "device_commands.hpp"  // kit/
+
 #include <array>
 #include <cstdint>
 #include <cstring>
@@ -38,32 +40,9 @@ struct Rng {
 };
 
 // ---- Commands ---------------------------------------------------------------------------------------------------
-#define VT_DEVICE_COMMANDS(X)                       \
-    X(vkCreateBuffer)                               \
-    X(vkDestroyBuffer)                              \
-    X(vkGetBufferMemoryRequirements)                \
-    X(vkAllocateMemory)                             \
-    X(vkFreeMemory)                                 \
-    X(vkBindBufferMemory)                           \
-    X(vkMapMemory)                                  \
-    X(vkUnmapMemory)                                \
-    X(vkGetBufferDeviceAddress)                     \
-    X(vkGetAccelerationStructureBuildSizesKHR)      \
-    X(vkCreateAccelerationStructureKHR)             \
-    X(vkDestroyAccelerationStructureKHR)            \
-    X(vkGetAccelerationStructureDeviceAddressKHR)   \
-    X(vkBuildAccelerationStructuresKHR)             \
-    X(vkCopyAccelerationStructureKHR)               \
-    X(vkCopyAccelerationStructureToMemoryKHR)       \
-    X(vkCopyMemoryToAccelerationStructureKHR)       \
-    X(vkWriteAccelerationStructuresPropertiesKHR)   \
-    X(vkGetDeviceAccelerationStructureCompatibilityKHR)
-
-struct Commands {
-#define VT_DECLARE(name) PFN_##name name = nullptr;
-    VT_DEVICE_COMMANDS(VT_DECLARE)
-#undef VT_DECLARE
-};
+// The commands of kit/device_commands.hpp (vkas_kit::Commands, its one list): the tests fetch them as the tool, the
+// benchmarks and the fuzzers do.
+using Commands = vkas_kit::Commands;
 
 // ---- Math helpers -----------------------------------------------------------------------------------------------
 using Float3 = std::array<float, 3>;

@@ -59,9 +59,7 @@ void Fixture::SetUp() {
     ci.pMessengerUserData = static_cast<vt::VkasTest*>(this);
     ci.workerThreadCount = 1;
     ASSERT_EQ(vkasCreateDevice(&ci, &other), VK_SUCCESS);
-#define VU_LOAD_OTHER(name) otherVk.name = reinterpret_cast<PFN_##name>(vkasGetDeviceProcAddr(other, #name));
-    VT_DEVICE_COMMANDS(VU_LOAD_OTHER)
-#undef VU_LOAD_OTHER
+    otherVk.load(other);
     const auto errors = takeValidationErrors();
     ASSERT_TRUE(errors.empty()) << "the world itself broke a rule: " << errors.front();
 }
