@@ -44,5 +44,9 @@ commands='api/(.*_commands|batch_trace|ray_query_api|proc_table|entry_points|gua
 while IFS= read -r hit; do
   echo "src/${hit%%:*}: api/validate/ may not include a command's file (${hit##*#include })"; status=1
 done < <(cd .. && grep -rnE "#include \"$commands\"" api/validate | sed -E 's/^([^:]+):([0-9]+):/\1:\2:/')
-[ $status -eq 0 ] && echo "check-layers: the engine's includes follow util <- format <- input <- assemble, format <- builders <- assemble, format <- trace; api/validate/ includes no command"
+# Valid usage lives in api/validate/ only: a command file names no VUID.
+while IFS= read -r hit; do
+  echo "src/${hit%%:*}: a valid-usage check in a command file (move it to api/validate/)"; status=1
+done < <(cd .. && grep -n '"VUID-' api/*.cpp api/*.hpp | sed -E 's/^([^:]+):([0-9]+):.*/\1:\2/')
+[ $status -eq 0 ] && echo "check-layers: the engine's includes follow util <- format <- input <- assemble, format <- builders <- assemble, format <- trace; api/validate/ includes no command; no command file names a VUID"
 exit $status

@@ -131,7 +131,7 @@ fi
 
 banner "layers (scripts/check-layers.sh)"
 "$root/scripts/check-layers.sh"
-record "layers" $? "util <- format <- input <- assemble, format <- builders <- assemble, format <- trace; api/validate/ includes no command"
+record "layers" $? "util <- format <- input <- assemble, format <- builders <- assemble, format <- trace; api/validate/ includes no command; no command file names a VUID"
 
 banner "lavapipe (the differential-conformance referee)"
 # The differential tests skip, loudly, only when lavapipe cannot be installed; once it is, they must run.

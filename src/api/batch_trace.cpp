@@ -8,8 +8,7 @@
 #include "api/device.hpp"
 #include "api/command_memory.hpp"
 #include "api/exception_result.hpp"
-#include "api/validate/ray.hpp"
-#include "api/validate/validator.hpp"
+#include "api/validate/batch_trace_calls.hpp"
 #include "engine/trace/batch_kernel.hpp"
 #include "engine/trace/batch_schedule.hpp"
 #include "engine/trace/packet_gather.hpp"
@@ -66,59 +65,20 @@ void runQuery(vkas::RayQueryState& q, uint32_t rayIndex, PFN_vkasIntersectAabb i
     }
 }
 
-// The parameter rules of vkas's own batch calls, named like Vulkan's implicit VUIDs.
-struct TraceVuids {
-    const char* command;
-    const char* device;    // device is a live VkDevice
-    const char* topLevel;  // topLevel is VK_NULL_HANDLE or a live VkAccelerationStructureKHR
-    const char* mode;      // mode is a VkasTraceMode
-    const char* rays;      // pRays and pHits are not NULL when rayCount is not 0
-};
-constexpr TraceVuids kTraceRaysVuids{"vkasTraceRays", "VUID-vkasTraceRays-device-parameter",
-                                     "VUID-vkasTraceRays-topLevel-parameter", "VUID-vkasTraceRays-mode-parameter",
-                                     "VUID-vkasTraceRays-pRays-parameter"};
-constexpr TraceVuids kTraceRaysProceduralVuids{
-    "vkasTraceRaysProcedural", "VUID-vkasTraceRaysProcedural-device-parameter",
-    "VUID-vkasTraceRaysProcedural-topLevel-parameter", "VUID-vkasTraceRaysProcedural-mode-parameter",
-    "VUID-vkasTraceRaysProcedural-pRays-parameter"};
-
 VkResult traceBatch(VkDevice device, VkAccelerationStructureKHR topLevel, VkasTraceMode mode, uint32_t rayFlags,
                     uint32_t cullMask, uint32_t rayCount, const VkasRay* pRays, VkasHit* pHits,
-                    PFN_vkasIntersectAabb intersect, void* userData, const TraceVuids& vuids) {
+                    PFN_vkasIntersectAabb intersect, void* userData, const vkas::TraceVuids& vuids) {
     vkas::Device* dev = vkas::Device::fromHandle(device);
     vkas::Validator v(dev, vuids.command);
+    if (!vkas::checkTraceDevice(v, dev, vuids)) return VK_ERROR_VALIDATION_FAILED_EXT;
     const vkas::AccelerationStructure* tlas = nullptr;
-    if (!dev) {
-        v.fail(vuids.device, "device is not a valid VkDevice.");
-        return VK_ERROR_VALIDATION_FAILED_EXT;
-    }
     if (topLevel != VK_NULL_HANDLE) {
         tlas = dev->validationEnabled()
                    ? dev->live<vkas::AccelerationStructure>(topLevel, vkas::ObjectMagic::AccelerationStructure)
                    : vkas::fromHandle<vkas::AccelerationStructure>(topLevel);
     }
-    if (v.enabled()) {
-        v.check(topLevel == VK_NULL_HANDLE || tlas != nullptr, vuids.topLevel,
-                "topLevel is not a live VkAccelerationStructureKHR.");
-        v.check(mode == VKAS_TRACE_MODE_CLOSEST_HIT || mode == VKAS_TRACE_MODE_ANY_HIT,
-                vuids.mode, "mode %d is not a VkasTraceMode.", int(mode));
-        v.check(rayCount == 0 || (pRays && pHits), vuids.rays,
-                "pRays or pHits is NULL with rayCount %u.", rayCount);
-        if (!v.failed()) {
-            static const float origin[3] = {0, 0, 0}, direction[3] = {0, 0, 1};
-            vkas::validateRay(v, tlas, rayFlags, origin, 0.0f, direction, 1.0f, "");
-            for (uint32_t i = 0; i < rayCount; ++i) {
-                const VkasRay& r = pRays[i];
-                if (vkas::rayValuesValid(r)) continue;  // no message
-                if (v.failureCount() >= 8) break;
-                char where[48];
-                std::snprintf(where, sizeof where, "pRays[%u]: ", i);
-                vkas::validateRay(v, nullptr, 0 /* the flags are checked once, above */, r.origin, r.tMin,
-                                  r.direction, r.tMax, where);
-            }
-        }
-        if (v.failed()) return VK_ERROR_VALIDATION_FAILED_EXT;
-    }
+    if (!vkas::checkTraceBatch(v, topLevel, tlas, mode, rayFlags, rayCount, pRays, pHits, vuids))
+        return VK_ERROR_VALIDATION_FAILED_EXT;
     const std::byte* block = tlas ? tlas->block() : nullptr;
     // Without an intersection step an AABB candidate never becomes a hit, so AABB instances are skipped
     // outright; the flag only ever removes candidates that would be dropped anyway.
@@ -172,7 +132,7 @@ extern "C" VKAS_API VkResult vkasTraceRays(VkDevice device, VkAccelerationStruct
     vkas::CommandHostMemory<VkDevice> memory(device);
     return vkas::guarded([&] {
         return traceBatch(device, topLevel, mode, rayFlags, cullMask, rayCount, pRays, pHits, nullptr, nullptr,
-                          kTraceRaysVuids);
+                          vkas::kTraceRaysVuids);
     });
 }
 
@@ -183,6 +143,6 @@ extern "C" VKAS_API VkResult vkasTraceRaysProcedural(VkDevice device, VkAccelera
     vkas::CommandHostMemory<VkDevice> memory(device);
     return vkas::guarded([&] {
         return traceBatch(device, topLevel, mode, rayFlags, cullMask, rayCount, pRays, pHits, pfnIntersect,
-                          pUserData, kTraceRaysProceduralVuids);
+                          pUserData, vkas::kTraceRaysProceduralVuids);
     });
 }

@@ -1,4 +1,4 @@
-// vkBuildAccelerationStructuresKHR: valid-usage checks first (api/validate/build_infos.hpp; nothing is written when
+// vkBuildAccelerationStructuresKHR: valid-usage checks first (api/validate/build_calls.hpp; nothing is written when
 // one fails), then the engine builds or refits each info on plain memory, now or as tasks of a deferred operation.
 #include <algorithm>
 #include <memory>
@@ -9,7 +9,7 @@
 #include "api/micromap.hpp"
 #include "api/entry_points.hpp"
 #include "api/object_lifetime.hpp"
-#include "api/validate/build_infos.hpp"
+#include "api/validate/build_calls.hpp"
 #include "engine/assemble/refit.hpp"
 #include "engine/assemble/structure_build.hpp"
 #include "engine/input/build_inputs.hpp"
@@ -22,13 +22,8 @@ VKAPI_ATTR VkResult VKAPI_CALL BuildAccelerationStructuresKHR(
     const VkAccelerationStructureBuildRangeInfoKHR* const* ppBuildRangeInfos) {
     Device* dev = Device::fromHandle(device);
     Validator v(dev, "vkBuildAccelerationStructuresKHR");
-    if (v.enabled()) {
-        if (!v.check(dev != nullptr, "VUID-vkBuildAccelerationStructuresKHR-device-parameter",
-                     "device is not a valid VkDevice."))
-            return VK_ERROR_VALIDATION_FAILED_EXT;
-        checkBuildAccelerationStructures(v, *dev, deferredOperation, infoCount, pInfos, ppBuildRangeInfos);
-        if (v.failed()) return VK_ERROR_VALIDATION_FAILED_EXT;
-    }
+    if (!checkBuildAccelerationStructuresCall(v, dev, deferredOperation, infoCount, pInfos, ppBuildRangeInfos))
+        return VK_ERROR_VALIDATION_FAILED_EXT;
     // One info's work; `parallel` spreads a build over the threads joined to a deferred operation.
     auto runInfo = [pInfos, ppBuildRangeInfos](uint32_t i, const ParallelFor* parallel) {
         auto* dst = fromHandle<AccelerationStructure>(pInfos[i].dstAccelerationStructure);

@@ -1,5 +1,5 @@
 // vkCopyAccelerationStructureKHR (CLONE, COMPACT), vkCopyAccelerationStructureToMemoryKHR (SERIALIZE) and
-// vkCopyMemoryToAccelerationStructureKHR (DESERIALIZE): valid-usage checks first (api/validate/copy_infos.hpp;
+// vkCopyMemoryToAccelerationStructureKHR (DESERIALIZE): valid-usage checks first (api/validate/copy_calls.hpp;
 // nothing is written when one fails), then the work functions of copy_commands.hpp on plain memory.
 #include "engine/util/host_memory.hpp"
 #include "api/copy_commands.hpp"
@@ -13,8 +13,7 @@
 
 #include "api/entry_points.hpp"
 #include "api/object_lifetime.hpp"
-#include "api/validate/copy_infos.hpp"
-#include "api/validate/parameters.hpp"
+#include "api/validate/copy_calls.hpp"
 #include "engine/format/layout.hpp"
 #include "engine/format/check.hpp"
 #include "engine/format/convert.hpp"
@@ -127,19 +126,7 @@ VKAPI_ATTR VkResult VKAPI_CALL CopyAccelerationStructureKHR(VkDevice device, VkD
                                                             const VkCopyAccelerationStructureInfoKHR* pInfo) {
     Device* dev = Device::fromHandle(device);
     Validator v(dev, "vkCopyAccelerationStructureKHR");
-    if (v.enabled()) {
-        if (!v.check(dev != nullptr, "VUID-vkCopyAccelerationStructureKHR-device-parameter",
-                     "device is not a valid VkDevice."))
-            return VK_ERROR_VALIDATION_FAILED_EXT;
-        checkDeferredOperation(v, *dev, deferredOperation,
-                               {"VUID-vkCopyAccelerationStructureKHR-deferredOperation-parameter",
-                                "VUID-vkCopyAccelerationStructureKHR-deferredOperation-parent",
-                                "VUID-vkCopyAccelerationStructureKHR-deferredOperation-03678"});
-        if (!v.check(pInfo != nullptr, "VUID-vkCopyAccelerationStructureKHR-pInfo-parameter", "pInfo is NULL."))
-            return VK_ERROR_VALIDATION_FAILED_EXT;
-        checkCopyAccelerationStructureInfo(v, *dev, pInfo);
-        if (v.failed()) return VK_ERROR_VALIDATION_FAILED_EXT;
-    }
+    if (const VkResult r = checkCopyAccelerationStructure(v, dev, deferredOperation, pInfo); r != VK_SUCCESS) return r;
     if (!dev || !pInfo) return VK_ERROR_UNKNOWN;
     auto* src = fromHandle<AccelerationStructure>(pInfo->src);
     auto* dst = fromHandle<AccelerationStructure>(pInfo->dst);
@@ -150,20 +137,7 @@ VKAPI_ATTR VkResult VKAPI_CALL CopyAccelerationStructureToMemoryKHR(
     VkDevice device, VkDeferredOperationKHR deferredOperation, const VkCopyAccelerationStructureToMemoryInfoKHR* pInfo) {
     Device* dev = Device::fromHandle(device);
     Validator v(dev, "vkCopyAccelerationStructureToMemoryKHR");
-    if (v.enabled()) {
-        if (!v.check(dev != nullptr, "VUID-vkCopyAccelerationStructureToMemoryKHR-device-parameter",
-                     "device is not a valid VkDevice."))
-            return VK_ERROR_VALIDATION_FAILED_EXT;
-        checkDeferredOperation(v, *dev, deferredOperation,
-                               {"VUID-vkCopyAccelerationStructureToMemoryKHR-deferredOperation-parameter",
-                                "VUID-vkCopyAccelerationStructureToMemoryKHR-deferredOperation-parent",
-                                "VUID-vkCopyAccelerationStructureToMemoryKHR-deferredOperation-03678"});
-        if (!v.check(pInfo != nullptr, "VUID-vkCopyAccelerationStructureToMemoryKHR-pInfo-parameter",
-                     "pInfo is NULL."))
-            return VK_ERROR_VALIDATION_FAILED_EXT;
-        checkCopyAccelerationStructureToMemoryInfo(v, *dev, pInfo);
-        if (v.failed()) return VK_ERROR_VALIDATION_FAILED_EXT;
-    }
+    if (const VkResult r = checkCopyAccelerationStructureToMemory(v, dev, deferredOperation, pInfo); r != VK_SUCCESS) return r;
     if (!dev || !pInfo) return VK_ERROR_UNKNOWN;
     auto* src = fromHandle<AccelerationStructure>(pInfo->src);
     void* out = pInfo->dst.hostAddress;
@@ -174,20 +148,7 @@ VKAPI_ATTR VkResult VKAPI_CALL CopyMemoryToAccelerationStructureKHR(
     VkDevice device, VkDeferredOperationKHR deferredOperation, const VkCopyMemoryToAccelerationStructureInfoKHR* pInfo) {
     Device* dev = Device::fromHandle(device);
     Validator v(dev, "vkCopyMemoryToAccelerationStructureKHR");
-    if (v.enabled()) {
-        if (!v.check(dev != nullptr, "VUID-vkCopyMemoryToAccelerationStructureKHR-device-parameter",
-                     "device is not a valid VkDevice."))
-            return VK_ERROR_VALIDATION_FAILED_EXT;
-        checkDeferredOperation(v, *dev, deferredOperation,
-                               {"VUID-vkCopyMemoryToAccelerationStructureKHR-deferredOperation-parameter",
-                                "VUID-vkCopyMemoryToAccelerationStructureKHR-deferredOperation-parent",
-                                "VUID-vkCopyMemoryToAccelerationStructureKHR-deferredOperation-03678"});
-        if (!v.check(pInfo != nullptr, "VUID-vkCopyMemoryToAccelerationStructureKHR-pInfo-parameter",
-                     "pInfo is NULL."))
-            return VK_ERROR_VALIDATION_FAILED_EXT;
-        const bool incompatible = checkCopyMemoryToAccelerationStructureInfo(v, *dev, pInfo);
-        if (v.failed()) return incompatible ? VK_ERROR_INCOMPATIBLE_VERSION_KHR : VK_ERROR_VALIDATION_FAILED_EXT;
-    }
+    if (const VkResult r = checkCopyMemoryToAccelerationStructure(v, dev, deferredOperation, pInfo); r != VK_SUCCESS) return r;
     if (!dev || !pInfo) return VK_ERROR_UNKNOWN;
     auto* dst = fromHandle<AccelerationStructure>(pInfo->dst);
     const void* blob = pInfo->src.hostAddress;

@@ -10,7 +10,7 @@
 #include "api/entry_points.hpp"
 #include "api/exception_result.hpp"
 #include "api/object_lifetime.hpp"
-#include "api/validate/parameters.hpp"
+#include "api/validate/deferred_calls.hpp"
 
 namespace vkas {
 
@@ -205,15 +205,7 @@ VKAPI_ATTR VkResult VKAPI_CALL CreateDeferredOperationKHR(VkDevice device, const
                                                           VkDeferredOperationKHR* pDeferredOperation) {
     Device* dev = Device::fromHandle(device);
     Validator v(dev, "vkCreateDeferredOperationKHR");
-    if (!dev) {
-        v.fail("VUID-vkCreateDeferredOperationKHR-device-parameter", "device is not a valid VkDevice.");
-        return VK_ERROR_VALIDATION_FAILED_EXT;
-    }
-    if (v.enabled()) {
-        v.check(pDeferredOperation != nullptr, "VUID-vkCreateDeferredOperationKHR-pDeferredOperation-parameter",
-                "pDeferredOperation is NULL.");
-        if (v.failed()) return VK_ERROR_VALIDATION_FAILED_EXT;
-    }
+    if (!checkCreateDeferredOperation(v, dev, pDeferredOperation)) return VK_ERROR_VALIDATION_FAILED_EXT;
     auto* op = createObject<DeferredOperation>(pAllocator, dev->allocator());
     if (!op) return VK_ERROR_OUT_OF_HOST_MEMORY;
     op->device = dev;
@@ -230,20 +222,8 @@ VKAPI_ATTR void VKAPI_CALL DestroyDeferredOperationKHR(VkDevice device, VkDeferr
                                                        const VkAllocationCallbacks* pAllocator) {
     Device* dev = Device::fromHandle(device);
     Validator v(dev, "vkDestroyDeferredOperationKHR");
-    if (!dev) return v.fail("VUID-vkDestroyDeferredOperationKHR-device-parameter", "device is not a valid VkDevice.");
-    if (operation == VK_NULL_HANDLE) return;
     DeferredOperation* op = liveOperation(dev, operation);
-    if (v.enabled()) {
-        op = checkHandle<DeferredOperation>(v, *dev, operation, ObjectMagic::DeferredOperation,
-                                            "VUID-vkDestroyDeferredOperationKHR-operation-parameter",
-                                            "VUID-vkDestroyDeferredOperationKHR-operation-parent", "operation");
-        if (!op) return;
-        v.check(!op->pending(), "VUID-vkDestroyDeferredOperationKHR-operation-03436",
-                "operation is not complete: join it until it completes before destroying it.");
-        checkDestroyAllocator(v, op->allocator, pAllocator, "VUID-vkDestroyDeferredOperationKHR-operation-03434",
-                              "VUID-vkDestroyDeferredOperationKHR-operation-03435");
-        if (v.failed()) return;
-    }
+    if (!checkDestroyDeferredOperation(v, dev, operation, pAllocator, op)) return;
     if (!op) return;
     dev->untrack(op);
     destroyObject(op);
@@ -253,45 +233,24 @@ VKAPI_ATTR uint32_t VKAPI_CALL GetDeferredOperationMaxConcurrencyKHR(VkDevice de
                                                                     VkDeferredOperationKHR operation) {
     Device* dev = Device::fromHandle(device);
     Validator v(dev, "vkGetDeferredOperationMaxConcurrencyKHR");
-    if (!dev) {
-        v.fail("VUID-vkGetDeferredOperationMaxConcurrencyKHR-device-parameter", "device is not a valid VkDevice.");
-        return 0;
-    }
+    if (!checkGetDeferredOperationMaxConcurrency(v, dev, operation)) return 0;
     DeferredOperation* op = liveOperation(dev, operation);
-    if (v.enabled() && !checkHandle<DeferredOperation>(v, *dev, operation, ObjectMagic::DeferredOperation,
-                                                       "VUID-vkGetDeferredOperationMaxConcurrencyKHR-operation-parameter",
-                                                       "VUID-vkGetDeferredOperationMaxConcurrencyKHR-operation-parent", "operation"))
-        return 0;
     return op ? op->maxConcurrency() : 0;
 }
 
 VKAPI_ATTR VkResult VKAPI_CALL GetDeferredOperationResultKHR(VkDevice device, VkDeferredOperationKHR operation) {
     Device* dev = Device::fromHandle(device);
     Validator v(dev, "vkGetDeferredOperationResultKHR");
-    if (!dev) {
-        v.fail("VUID-vkGetDeferredOperationResultKHR-device-parameter", "device is not a valid VkDevice.");
-        return VK_ERROR_VALIDATION_FAILED_EXT;
-    }
+    if (!checkGetDeferredOperationResult(v, dev, operation)) return VK_ERROR_VALIDATION_FAILED_EXT;
     DeferredOperation* op = liveOperation(dev, operation);
-    if (v.enabled() && !checkHandle<DeferredOperation>(v, *dev, operation, ObjectMagic::DeferredOperation,
-                                                       "VUID-vkGetDeferredOperationResultKHR-operation-parameter",
-                                                       "VUID-vkGetDeferredOperationResultKHR-operation-parent", "operation"))
-        return VK_ERROR_VALIDATION_FAILED_EXT;
     return op ? op->result() : VK_ERROR_UNKNOWN;
 }
 
 VKAPI_ATTR VkResult VKAPI_CALL DeferredOperationJoinKHR(VkDevice device, VkDeferredOperationKHR operation) {
     Device* dev = Device::fromHandle(device);
     Validator v(dev, "vkDeferredOperationJoinKHR");
-    if (!dev) {
-        v.fail("VUID-vkDeferredOperationJoinKHR-device-parameter", "device is not a valid VkDevice.");
-        return VK_ERROR_VALIDATION_FAILED_EXT;
-    }
+    if (!checkDeferredOperationJoin(v, dev, operation)) return VK_ERROR_VALIDATION_FAILED_EXT;
     DeferredOperation* op = liveOperation(dev, operation);
-    if (v.enabled() && !checkHandle<DeferredOperation>(v, *dev, operation, ObjectMagic::DeferredOperation,
-                                                       "VUID-vkDeferredOperationJoinKHR-operation-parameter",
-                                                       "VUID-vkDeferredOperationJoinKHR-operation-parent", "operation"))
-        return VK_ERROR_VALIDATION_FAILED_EXT;
     return op ? op->join() : VK_ERROR_UNKNOWN;
 }
 

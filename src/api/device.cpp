@@ -5,7 +5,7 @@
 #include "api/exception_result.hpp"
 #include "api/object_lifetime.hpp"
 
-#include "api/validate/validator.hpp"
+#include "api/validate/device_calls.hpp"
 #include "engine/format/layout.hpp"
 
 #include <atomic>
@@ -209,10 +209,7 @@ extern "C" VKAS_API void vkasDestroyDevice(VkDevice device) {
     size_t leaked = dev->releaseAll();
     if (leaked != 0 && dev->validationEnabled()) try {
         vkas::Validator v(dev, "vkDestroyDevice");
-        v.fail("VUID-vkDestroyDevice-device-05137",
-               "%zu objects (buffers, memory, acceleration structures or micromaps) created from device were not destroyed; "
-               "vkas freed them.",
-               leaked);
+        vkas::reportLeakedObjects(v, leaked);
     } catch (...) {  // the message could not be allocated: the device is destroyed all the same
     }
     const VkAllocationCallbacks callbacks = dev->allocator();

@@ -11,9 +11,7 @@
 #include "api/entry_points.hpp"
 #include "api/object_lifetime.hpp"
 #include "api/micromap.hpp"
-#include "api/validate/micromap_build_infos.hpp"
-#include "api/validate/micromap_create_info.hpp"
-#include "api/validate/parameters.hpp"
+#include "api/validate/micromap_calls.hpp"
 #include "engine/assemble/micromap_build.hpp"
 #include "engine/format/micromap_layout.hpp"
 
@@ -49,16 +47,7 @@ VKAPI_ATTR VkResult VKAPI_CALL CreateMicromapEXT(VkDevice device, const VkMicrom
                                                  const VkAllocationCallbacks* pAllocator, VkMicromapEXT* pMicromap) {
     Device* dev = Device::fromHandle(device);
     Validator v(dev, "vkCreateMicromapEXT");
-    if (!dev) {
-        v.fail("VUID-vkCreateMicromapEXT-device-parameter", "device is not a valid VkDevice.");
-        return VK_ERROR_VALIDATION_FAILED_EXT;
-    }
-    if (v.enabled()) {
-        if (v.check(pCreateInfo != nullptr, "VUID-vkCreateMicromapEXT-pCreateInfo-parameter", "pCreateInfo is NULL."))
-            checkMicromapCreateInfo(v, *dev, *pCreateInfo);
-        v.check(pMicromap != nullptr, "VUID-vkCreateMicromapEXT-pMicromap-parameter", "pMicromap is NULL.");
-        if (v.failed()) return VK_ERROR_VALIDATION_FAILED_EXT;
-    }
+    if (!checkCreateMicromap(v, dev, pCreateInfo, pMicromap)) return VK_ERROR_VALIDATION_FAILED_EXT;
     auto* micromap = createObject<Micromap>(pAllocator, dev->allocator());
     if (!micromap) return VK_ERROR_OUT_OF_HOST_MEMORY;
     micromap->device = dev;
@@ -79,17 +68,7 @@ VKAPI_ATTR void VKAPI_CALL DestroyMicromapEXT(VkDevice device, VkMicromapEXT mic
                                               const VkAllocationCallbacks* pAllocator) {
     Device* dev = Device::fromHandle(device);
     Validator v(dev, "vkDestroyMicromapEXT");
-    if (!dev) return v.fail("VUID-vkDestroyMicromapEXT-device-parameter", "device is not a valid VkDevice.");
-    if (micromap == VK_NULL_HANDLE) return;
-    if (v.enabled()) {
-        const auto* m = checkHandle<Micromap>(v, *dev, micromap, ObjectMagic::Micromap,
-                                              "VUID-vkDestroyMicromapEXT-micromap-parameter",
-                                              "VUID-vkDestroyMicromapEXT-micromap-parent", "micromap");
-        if (!m) return;
-        checkDestroyAllocator(v, m->allocator, pAllocator, "VUID-vkDestroyMicromapEXT-micromap-07442",
-                              "VUID-vkDestroyMicromapEXT-micromap-07443");
-        if (v.failed()) return;
-    }
+    if (!checkDestroyMicromap(v, dev, micromap, pAllocator)) return;
     auto* m = fromHandle<Micromap>(micromap);
     dev->untrack(m);
     destroyObject(m);
@@ -100,28 +79,7 @@ VKAPI_ATTR void VKAPI_CALL GetMicromapBuildSizesEXT(VkDevice device, VkAccelerat
                                                     VkMicromapBuildSizesInfoEXT* pSizeInfo) {
     Device* dev = Device::fromHandle(device);
     Validator v(dev, "vkGetMicromapBuildSizesEXT");
-    if (v.enabled()) {
-        if (!v.check(dev != nullptr, "VUID-vkGetMicromapBuildSizesEXT-device-parameter",
-                     "device is not a valid VkDevice."))
-            return;
-        v.check(buildType == VK_ACCELERATION_STRUCTURE_BUILD_TYPE_HOST_KHR ||
-                    buildType == VK_ACCELERATION_STRUCTURE_BUILD_TYPE_DEVICE_KHR ||
-                    buildType == VK_ACCELERATION_STRUCTURE_BUILD_TYPE_HOST_OR_DEVICE_KHR,
-                "VUID-vkGetMicromapBuildSizesEXT-buildType-parameter", "buildType %d is not valid.", int(buildType));
-        // Spec: "The dstMicromap, mode, data, scratchData, and triangleArray members of pBuildInfo are ignored by
-        // this command."
-        if (v.check(pBuildInfo != nullptr, "VUID-vkGetMicromapBuildSizesEXT-pBuildInfo-parameter",
-                    "pBuildInfo is NULL."))
-            checkMicromapBuildInfoUsage(v, *pBuildInfo, "pBuildInfo");
-        if (v.check(pSizeInfo != nullptr, "VUID-vkGetMicromapBuildSizesEXT-pSizeInfo-parameter",
-                    "pSizeInfo is NULL.")) {
-            v.check(pSizeInfo->sType == VK_STRUCTURE_TYPE_MICROMAP_BUILD_SIZES_INFO_EXT,
-                    "VUID-VkMicromapBuildSizesInfoEXT-sType-sType", "pSizeInfo->sType is %d.", int(pSizeInfo->sType));
-            v.check(pSizeInfo->pNext == nullptr, "VUID-VkMicromapBuildSizesInfoEXT-pNext-pNext",
-                    "pSizeInfo->pNext is not NULL.");
-        }
-        if (v.failed()) return;
-    }
+    if (!checkGetMicromapBuildSizes(v, dev, buildType, pBuildInfo, pSizeInfo)) return;
     if (!pBuildInfo || !pSizeInfo) return;
     pSizeInfo->micromapSize = micromapSizeForUsage(*pBuildInfo);
     pSizeInfo->buildScratchSize = 0;  // the build needs no scratch memory
@@ -135,12 +93,7 @@ VKAPI_ATTR VkResult VKAPI_CALL BuildMicromapsEXT(VkDevice device, VkDeferredOper
                                                  uint32_t infoCount, const VkMicromapBuildInfoEXT* pInfos) {
     Device* dev = Device::fromHandle(device);
     Validator v(dev, "vkBuildMicromapsEXT");
-    if (v.enabled()) {
-        if (!v.check(dev != nullptr, "VUID-vkBuildMicromapsEXT-device-parameter", "device is not a valid VkDevice."))
-            return VK_ERROR_VALIDATION_FAILED_EXT;
-        checkBuildMicromaps(v, *dev, deferredOperation, infoCount, pInfos);
-        if (v.failed()) return VK_ERROR_VALIDATION_FAILED_EXT;
-    }
+    if (!checkBuildMicromapsCall(v, dev, deferredOperation, infoCount, pInfos)) return VK_ERROR_VALIDATION_FAILED_EXT;
     // One info's work; a build that fails leaves its destination unconstructed.
     auto runInfo = [pInfos](uint32_t i) {
         auto* dst = fromHandle<Micromap>(pInfos[i].dstMicromap);

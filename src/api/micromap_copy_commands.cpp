@@ -1,6 +1,6 @@
 // vkCopyMicromapEXT (CLONE, COMPACT), vkCopyMicromapToMemoryEXT (SERIALIZE), vkCopyMemoryToMicromapEXT
 // (DESERIALIZE), vkWriteMicromapsPropertiesEXT and vkGetDeviceMicromapCompatibilityEXT: valid-usage checks first
-// (api/validate/micromap_copy_infos.hpp; nothing is written when one fails), then the work on plain memory
+// (api/validate/micromap_copy_calls.hpp; nothing is written when one fails), then the work on plain memory
 // (engine/format/micromap_serialize.hpp), now or as the task of a deferred operation. Each work function checks what
 // it must to stay inside the memory it was given (validation on or off) and returns VK_ERROR_UNKNOWN, with nothing
 // written, when it cannot proceed; deserialization checks its input completely (engine/format/micromap_check.hpp).
@@ -11,8 +11,7 @@
 #include "api/deferred_operation.hpp"
 #include "api/entry_points.hpp"
 #include "api/micromap.hpp"
-#include "api/validate/micromap_copy_infos.hpp"
-#include "api/validate/parameters.hpp"
+#include "api/validate/micromap_copy_calls.hpp"
 #include "engine/format/micromap_check.hpp"
 #include "engine/format/micromap_serialize.hpp"
 
@@ -77,18 +76,7 @@ VKAPI_ATTR VkResult VKAPI_CALL CopyMicromapEXT(VkDevice device, VkDeferredOperat
                                                const VkCopyMicromapInfoEXT* pInfo) {
     Device* dev = Device::fromHandle(device);
     Validator v(dev, "vkCopyMicromapEXT");
-    if (v.enabled()) {
-        if (!v.check(dev != nullptr, "VUID-vkCopyMicromapEXT-device-parameter", "device is not a valid VkDevice."))
-            return VK_ERROR_VALIDATION_FAILED_EXT;
-        checkDeferredOperation(v, *dev, deferredOperation,
-                               {"VUID-vkCopyMicromapEXT-deferredOperation-parameter",
-                                "VUID-vkCopyMicromapEXT-deferredOperation-parent",
-                                "VUID-vkCopyMicromapEXT-deferredOperation-03678"});
-        if (!v.check(pInfo != nullptr, "VUID-vkCopyMicromapEXT-pInfo-parameter", "pInfo is NULL."))
-            return VK_ERROR_VALIDATION_FAILED_EXT;
-        checkCopyMicromapInfo(v, *dev, *pInfo);
-        if (v.failed()) return VK_ERROR_VALIDATION_FAILED_EXT;
-    }
+    if (const VkResult r = checkCopyMicromap(v, dev, deferredOperation, pInfo); r != VK_SUCCESS) return r;
     if (!dev || !pInfo) return VK_ERROR_UNKNOWN;
     auto* src = fromHandle<Micromap>(pInfo->src);
     auto* dst = fromHandle<Micromap>(pInfo->dst);
@@ -99,19 +87,7 @@ VKAPI_ATTR VkResult VKAPI_CALL CopyMicromapToMemoryEXT(VkDevice device, VkDeferr
                                                        const VkCopyMicromapToMemoryInfoEXT* pInfo) {
     Device* dev = Device::fromHandle(device);
     Validator v(dev, "vkCopyMicromapToMemoryEXT");
-    if (v.enabled()) {
-        if (!v.check(dev != nullptr, "VUID-vkCopyMicromapToMemoryEXT-device-parameter",
-                     "device is not a valid VkDevice."))
-            return VK_ERROR_VALIDATION_FAILED_EXT;
-        checkDeferredOperation(v, *dev, deferredOperation,
-                               {"VUID-vkCopyMicromapToMemoryEXT-deferredOperation-parameter",
-                                "VUID-vkCopyMicromapToMemoryEXT-deferredOperation-parent",
-                                "VUID-vkCopyMicromapToMemoryEXT-deferredOperation-03678"});
-        if (!v.check(pInfo != nullptr, "VUID-vkCopyMicromapToMemoryEXT-pInfo-parameter", "pInfo is NULL."))
-            return VK_ERROR_VALIDATION_FAILED_EXT;
-        checkCopyMicromapToMemoryInfo(v, *dev, *pInfo);
-        if (v.failed()) return VK_ERROR_VALIDATION_FAILED_EXT;
-    }
+    if (const VkResult r = checkCopyMicromapToMemory(v, dev, deferredOperation, pInfo); r != VK_SUCCESS) return r;
     if (!dev || !pInfo) return VK_ERROR_UNKNOWN;
     auto* src = fromHandle<Micromap>(pInfo->src);
     void* out = pInfo->dst.hostAddress;
@@ -122,19 +98,7 @@ VKAPI_ATTR VkResult VKAPI_CALL CopyMemoryToMicromapEXT(VkDevice device, VkDeferr
                                                        const VkCopyMemoryToMicromapInfoEXT* pInfo) {
     Device* dev = Device::fromHandle(device);
     Validator v(dev, "vkCopyMemoryToMicromapEXT");
-    if (v.enabled()) {
-        if (!v.check(dev != nullptr, "VUID-vkCopyMemoryToMicromapEXT-device-parameter",
-                     "device is not a valid VkDevice."))
-            return VK_ERROR_VALIDATION_FAILED_EXT;
-        checkDeferredOperation(v, *dev, deferredOperation,
-                               {"VUID-vkCopyMemoryToMicromapEXT-deferredOperation-parameter",
-                                "VUID-vkCopyMemoryToMicromapEXT-deferredOperation-parent",
-                                "VUID-vkCopyMemoryToMicromapEXT-deferredOperation-03678"});
-        if (!v.check(pInfo != nullptr, "VUID-vkCopyMemoryToMicromapEXT-pInfo-parameter", "pInfo is NULL."))
-            return VK_ERROR_VALIDATION_FAILED_EXT;
-        const bool incompatible = checkCopyMemoryToMicromapInfo(v, *dev, *pInfo);
-        if (v.failed()) return incompatible ? VK_ERROR_INCOMPATIBLE_VERSION_KHR : VK_ERROR_VALIDATION_FAILED_EXT;
-    }
+    if (const VkResult r = checkCopyMemoryToMicromap(v, dev, deferredOperation, pInfo); r != VK_SUCCESS) return r;
     if (!dev || !pInfo) return VK_ERROR_UNKNOWN;
     auto* dst = fromHandle<Micromap>(pInfo->dst);
     const void* blob = pInfo->src.hostAddress;
@@ -146,13 +110,10 @@ VKAPI_ATTR VkResult VKAPI_CALL WriteMicromapsPropertiesEXT(VkDevice device, uint
                                                            size_t dataSize, void* pData, size_t stride) {
     Device* dev = Device::fromHandle(device);
     Validator v(dev, "vkWriteMicromapsPropertiesEXT");
-    if (v.enabled()) {
-        if (!v.check(dev != nullptr, "VUID-vkWriteMicromapsPropertiesEXT-device-parameter",
-                     "device is not a valid VkDevice."))
-            return VK_ERROR_VALIDATION_FAILED_EXT;
-        checkWriteMicromapsProperties(v, *dev, micromapCount, pMicromaps, queryType, dataSize, pData, stride);
-        if (v.failed()) return VK_ERROR_VALIDATION_FAILED_EXT;
-    }
+    if (const VkResult r = checkWriteMicromapsPropertiesCall(v, dev, micromapCount, pMicromaps, queryType, dataSize,
+                                                             pData, stride);
+        r != VK_SUCCESS)
+        return r;
     if (!dev || !pMicromaps || !pData) return VK_SUCCESS;
     auto* out = static_cast<std::byte*>(pData);
     for (uint32_t i = 0; i < micromapCount; ++i) {
@@ -175,24 +136,7 @@ VKAPI_ATTR void VKAPI_CALL GetDeviceMicromapCompatibilityEXT(VkDevice device,
                                                              VkAccelerationStructureCompatibilityKHR* pCompatibility) {
     Device* dev = Device::fromHandle(device);
     Validator v(dev, "vkGetDeviceMicromapCompatibilityEXT");
-    if (v.enabled()) {
-        if (!v.check(dev != nullptr, "VUID-vkGetDeviceMicromapCompatibilityEXT-device-parameter",
-                     "device is not a valid VkDevice."))
-            return;
-        v.check(pCompatibility != nullptr, "VUID-vkGetDeviceMicromapCompatibilityEXT-pCompatibility-parameter",
-                "pCompatibility is NULL.");
-        if (v.check(pVersionInfo != nullptr, "VUID-vkGetDeviceMicromapCompatibilityEXT-pVersionInfo-parameter",
-                    "pVersionInfo is NULL.")) {
-            v.check(pVersionInfo->sType == VK_STRUCTURE_TYPE_MICROMAP_VERSION_INFO_EXT,
-                    "VUID-VkMicromapVersionInfoEXT-sType-sType", "pVersionInfo->sType is %d.",
-                    int(pVersionInfo->sType));
-            v.check(pVersionInfo->pNext == nullptr, "VUID-VkMicromapVersionInfoEXT-pNext-pNext",
-                    "pVersionInfo->pNext is not NULL.");
-            v.check(pVersionInfo->pVersionData != nullptr, "VUID-VkMicromapVersionInfoEXT-pVersionData-parameter",
-                    "pVersionInfo->pVersionData is NULL.");
-        }
-        if (v.failed()) return;
-    }
+    if (!checkGetDeviceMicromapCompatibility(v, dev, pVersionInfo, pCompatibility)) return;
     if (!pCompatibility) return;
     // The driverUUID and compatibility UUID of the version header are compared with the pair vkas writes.
     const bool ok =

@@ -1,13 +1,12 @@
 // vkWriteAccelerationStructuresPropertiesKHR and vkGetDeviceAccelerationStructureCompatibilityKHR: valid-usage checks
-// first (the properties query's in api/validate/properties_query.hpp), then the answer.
+// first (api/validate/query_calls.hpp), then the answer.
 #include <cstdio>
 #include <cinttypes>
 #include <cstring>
 
 #include "api/copy_commands.hpp"
 #include "api/entry_points.hpp"
-#include "api/validate/properties_query.hpp"
-#include "api/validate/validator.hpp"
+#include "api/validate/query_calls.hpp"
 #include "engine/format/layout.hpp"
 #include "engine/format/serialize.hpp"
 
@@ -47,14 +46,9 @@ VKAPI_ATTR VkResult VKAPI_CALL WriteAccelerationStructuresPropertiesKHR(
     VkQueryType queryType, size_t dataSize, void* pData, size_t stride) {
     Device* dev = Device::fromHandle(device);
     Validator v(dev, "vkWriteAccelerationStructuresPropertiesKHR");
-    if (v.enabled()) {
-        if (!v.check(dev != nullptr, "VUID-vkWriteAccelerationStructuresPropertiesKHR-device-parameter",
-                     "device is not a valid VkDevice."))
-            return VK_ERROR_VALIDATION_FAILED_EXT;
-        checkWriteAccelerationStructuresProperties(v, *dev, accelerationStructureCount, pAccelerationStructures,
-                                                   queryType, dataSize, pData, stride);
-        if (v.failed()) return VK_ERROR_VALIDATION_FAILED_EXT;
-    }
+    if (!checkWriteAccelerationStructuresPropertiesCall(v, dev, accelerationStructureCount, pAccelerationStructures,
+                                                        queryType, dataSize, pData, stride))
+        return VK_ERROR_VALIDATION_FAILED_EXT;
     if (!dev || !pAccelerationStructures) return VK_SUCCESS;
     // Objects are looked up again (validation off: unknown handles give 0, never a dereference of garbage).
     constexpr uint32_t kChunk = 64;
@@ -77,27 +71,7 @@ VKAPI_ATTR void VKAPI_CALL GetDeviceAccelerationStructureCompatibilityKHR(
     VkAccelerationStructureCompatibilityKHR* pCompatibility) {
     Device* dev = Device::fromHandle(device);
     Validator v(dev, "vkGetDeviceAccelerationStructureCompatibilityKHR");
-    if (v.enabled()) {
-        if (!v.check(dev != nullptr, "VUID-vkGetDeviceAccelerationStructureCompatibilityKHR-device-parameter",
-                     "device is not a valid VkDevice."))
-            return;
-        v.check(pCompatibility != nullptr,
-                "VUID-vkGetDeviceAccelerationStructureCompatibilityKHR-pCompatibility-parameter",
-                "pCompatibility is NULL.");
-        if (v.check(pVersionInfo != nullptr,
-                    "VUID-vkGetDeviceAccelerationStructureCompatibilityKHR-pVersionInfo-parameter",
-                    "pVersionInfo is NULL.")) {
-            v.check(pVersionInfo->sType == VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_VERSION_INFO_KHR,
-                    "VUID-VkAccelerationStructureVersionInfoKHR-sType-sType", "pVersionInfo->sType is %d.",
-                    int(pVersionInfo->sType));
-            v.check(pVersionInfo->pNext == nullptr, "VUID-VkAccelerationStructureVersionInfoKHR-pNext-pNext",
-                    "pVersionInfo->pNext is not NULL.");
-            v.check(pVersionInfo->pVersionData != nullptr,
-                    "VUID-VkAccelerationStructureVersionInfoKHR-pVersionData-parameter",
-                    "pVersionInfo->pVersionData is NULL.");
-        }
-        if (v.failed()) return;
-    }
+    if (!checkGetDeviceAccelerationStructureCompatibility(v, dev, pVersionInfo, pCompatibility)) return;
     if (!pCompatibility) return;
     const bool ok = pVersionInfo && pVersionInfo->pVersionData && serial::compatibleVersion(pVersionInfo->pVersionData);
     *pCompatibility = ok ? VK_ACCELERATION_STRUCTURE_COMPATIBILITY_COMPATIBLE_KHR

@@ -4,8 +4,7 @@
 
 #include "api/device.hpp"
 #include "api/objects.hpp"
-#include "api/validate/ray.hpp"
-#include "api/validate/validator.hpp"
+#include "api/validate/ray_query_calls.hpp"
 #include "engine/format/motion.hpp"
 #include "engine/trace/ray_query.hpp"
 #include "vkas/vkas.h"
@@ -86,24 +85,16 @@ VKAS_API void vkasRayQueryInitialize(VkasRayQuery* q, VkAccelerationStructureKHR
     recordStructure(q, tlas);
 }
 
-// [NV-motion] vkasRayQueryInitialize with a ray time. The time rule is the one of OpTraceRayMotionNV (SPIR-V has
-// no ray-query instruction with a time): VUID-RuntimeSpirv-OpTraceRayMotionNV-06366, time in [0.0, 1.0]. A query
-// that breaks it (NaN included) is reported and behaves as for a null acceleration structure.
+// [NV-motion] vkasRayQueryInitialize with a ray time, whose rule is that of OpTraceRayMotionNV
+// (api/validate/ray_query_calls.hpp). A query that breaks it (NaN included) is reported and behaves as for a null
+// acceleration structure.
 VKAS_API void vkasRayQueryInitializeMotion(VkasRayQuery* q, VkAccelerationStructureKHR topLevel, uint32_t rayFlags,
                                            uint32_t cullMask, const float origin[3], float tMin,
                                            const float direction[3], float tMax, float time) {
     const vkas::AccelerationStructure* tlas = liveStructure(topLevel);
     vkas::Validator v(tlas ? tlas->device : nullptr, "vkasRayQueryInitializeMotion");
-    bool valid = true;
-    if (v.enabled()) {
-        if (!vkas::queryRayValid(topLevel, tlas, rayFlags, origin, tMin, direction, tMax))
-            valid = vkas::checkTopLevelHandle(v, topLevel, tlas) &&
-                    vkas::validateRay(v, tlas, rayFlags, origin, tMin, direction, tMax, "");
-        valid &= v.check(time >= 0.0f && time <= 1.0f, "VUID-RuntimeSpirv-OpTraceRayMotionNV-06366",
-                         "the ray time %g is not between 0.0 and 1.0.", double(time));
-    } else if (!(time >= 0.0f && time <= 1.0f)) {
-        valid = false;  // never interpolate outside [0, 1], even without validation
-    }
+    const bool valid =
+        vkas::checkRayQueryInitializeMotion(v, topLevel, tlas, rayFlags, origin, tMin, direction, tMax, time);
     const std::byte* block = (tlas && valid) ? tlas->block() : nullptr;
     static const float zero[3] = {0, 0, 0};
     vkas::queryInitialize(state(q), block, vkas::resolveAccelerationStructure, rayFlags, cullMask,
@@ -120,16 +111,7 @@ VKAS_API void vkasRayQueryGenerateIntersection(VkasRayQuery* q, float tHit) {
     if (s.candidatePending && s.candidate.type == vkas::kCandidateAabb) {
         vkas::Validator v(object(q).device, "vkasRayQueryGenerateIntersection");
         // s.tMax is the committed hit's t, or RayTmax while there is none: the bound 06353 names.
-        if (v.enabled()) {
-            // A motion structure takes no generated intersections: the instruction has no effect.
-            if (!v.check(!object(q).motion, "VUID-RuntimeSpirv-OpRayQueryGenerateIntersectionKHR-06354",
-                         "the ray query traverses a structure built with VK_BUILD_ACCELERATION_STRUCTURE_MOTION_BIT_NV; "
-                         "the intersection is not generated."))
-                return;
-            v.check(tHit >= s.tMin && tHit <= s.tMax, "VUID-RuntimeSpirv-OpRayQueryGenerateIntersectionKHR-06353",
-                    "Hit T %g is outside [RayTmin %g, committed T %g]; the intersection is not generated.",
-                    double(tHit), double(s.tMin), double(s.tMax));
-        }
+        if (!vkas::checkRayQueryGenerateIntersection(v, object(q).motion, tHit, s.tMin, s.tMax)) return;
     }
     vkas::queryGenerate(state(q), tHit);  // ignores a Hit T outside that range
 }
@@ -207,13 +189,7 @@ VKAS_API void vkasRayQueryGetIntersectionTriangleVertexPositions(const VkasRayQu
         const std::byte* blas = vkas::resolveAccelerationStructure(h.instance->reference);
         const auto* query = reinterpret_cast<const QueryObject*>(q->opaque);
         vkas::Validator v(query->device, "vkasRayQueryGetIntersectionTriangleVertexPositions");
-        if (v.enabled() && blas &&
-            !v.check(vkas::format::header(blas)->buildFlags & VK_BUILD_ACCELERATION_STRUCTURE_ALLOW_DATA_ACCESS_KHR,
-                     "VUID-RuntimeSpirv-flags-08761",
-                     "the %s intersection's bottom-level structure was not built with "
-                     "VK_BUILD_ACCELERATION_STRUCTURE_ALLOW_DATA_ACCESS_KHR.",
-                     committed ? "committed" : "candidate"))
-            return;
+        if (!vkas::checkRayQueryTriangleVertexPositions(v, blas, committed)) return;
     }
     // The positions the intersection used ([NV-motion] those at the ray time), kept with the hit.
     if (h.isTriangle)

@@ -1,6 +1,6 @@
 // Rules on the info structures of vkCopyAccelerationStructureKHR (CLONE, COMPACT),
 // vkCopyAccelerationStructureToMemoryKHR (SERIALIZE) and vkCopyMemoryToAccelerationStructureKHR (DESERIALIZE): sType,
-// pNext, mode, the structures and host addresses, and what the source holds. `pInfo` is not NULL (the commands check
+// pNext, mode, the structures and host addresses, and what the source holds. `pInfo` is not NULL (copy_calls.hpp checks
 // that, and the device and deferredOperation parameters, first).
 #pragma once
 

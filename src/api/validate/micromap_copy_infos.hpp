@@ -1,7 +1,7 @@
 // The rules of vkCopyMicromapEXT (VkCopyMicromapInfoEXT), vkCopyMicromapToMemoryEXT
 // (VkCopyMicromapToMemoryInfoEXT), vkCopyMemoryToMicromapEXT (VkCopyMemoryToMicromapInfoEXT) and
-// vkWriteMicromapsPropertiesEXT, but device-parameter, the deferred operation and pInfo-parameter, which the
-// commands check.
+// vkWriteMicromapsPropertiesEXT, but device-parameter, the deferred operation and pInfo-parameter, which
+// micromap_copy_calls.hpp checks.
 #pragma once
 
 #include <vulkan/vulkan_core.h>
