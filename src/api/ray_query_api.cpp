@@ -111,7 +111,8 @@ VKAS_API void vkasRayQueryGenerateIntersection(VkasRayQuery* q, float tHit) {
     if (s.candidatePending && s.candidate.type == vkas::kCandidateAabb) {
         vkas::Validator v(object(q).device, "vkasRayQueryGenerateIntersection");
         // s.tMax is the committed hit's t, or RayTmax while there is none: the bound 06353 names.
-        if (!vkas::checkRayQueryGenerateIntersection(v, object(q).motion, tHit, s.tMin, s.tMax)) return;
+        // v.enabled() here: a call per candidate costs nothing without validation.
+        if (v.enabled() && !vkas::checkRayQueryGenerateIntersection(v, object(q).motion, tHit, s.tMin, s.tMax)) return;
     }
     vkas::queryGenerate(state(q), tHit);  // ignores a Hit T outside that range
 }
@@ -189,7 +190,7 @@ VKAS_API void vkasRayQueryGetIntersectionTriangleVertexPositions(const VkasRayQu
         const std::byte* blas = vkas::resolveAccelerationStructure(h.instance->reference);
         const auto* query = reinterpret_cast<const QueryObject*>(q->opaque);
         vkas::Validator v(query->device, "vkasRayQueryGetIntersectionTriangleVertexPositions");
-        if (!vkas::checkRayQueryTriangleVertexPositions(v, blas, committed)) return;
+        if (v.enabled() && !vkas::checkRayQueryTriangleVertexPositions(v, blas, committed)) return;
     }
     // The positions the intersection used ([NV-motion] those at the ray time), kept with the hit.
     if (h.isTriangle)
